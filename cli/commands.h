@@ -1,0 +1,20 @@
+// The subcommands of the ssgi tool, one file each; main.cpp dispatches to them.
+#pragma once
+
+namespace ssgi_cli {
+
+// Exit codes, as documented in man/ssgi.1 (EXIT STATUS).
+enum ExitCode : int {
+  kExitOk = 0,
+  kExitSomeFramesFailed = 1,
+  kExitUsage = 2,
+  kExitInput = 3,
+  kExitIO = 4,
+};
+
+// Each takes the arguments after the subcommand name (argv[0] is the subcommand) and returns
+// an exit code; ssgi::Error escaping from one is reported by main().
+int run_info(int argc, char** argv);
+int run_compare(int argc, char** argv);
+
+}  // namespace ssgi_cli

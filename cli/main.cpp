@@ -1,0 +1,86 @@
+// ssgi: screen-space diffuse global illumination for OpenEXR sequences.
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <string>
+
+#include "commands.h"
+#include "ssgi/error.h"
+#include "ssgi/version.h"
+
+namespace {
+
+struct Subcommand {
+  const char* name;
+  const char* summary;
+  int (*run)(int argc, char** argv);
+};
+
+const Subcommand kSubcommands[] = {
+    {"info", "print the layout, cameras and processing plan of a sequence", ssgi_cli::run_info},
+    {"compare", "compare images or sequences with error metrics and thresholds",
+     ssgi_cli::run_compare},
+};
+
+void print_usage(std::FILE* out) {
+  std::fprintf(out,
+               "usage: ssgi <subcommand> [options]\n"
+               "       ssgi --help | --version\n\n"
+               "subcommands:\n");
+  for (const Subcommand& s : kSubcommands) std::fprintf(out, "  %-10s %s\n", s.name, s.summary);
+  std::fprintf(out, "\n'ssgi <subcommand> --help' lists its options; man ssgi has the rest.\n");
+}
+
+int exit_code_for(ssgi::ErrorKind kind) {
+  switch (kind) {
+    case ssgi::ErrorKind::kUsage:
+      return ssgi_cli::kExitUsage;
+    case ssgi::ErrorKind::kInput:
+      return ssgi_cli::kExitInput;
+    case ssgi::ErrorKind::kIO:
+    case ssgi::ErrorKind::kInternal:
+      return ssgi_cli::kExitIO;
+  }
+  return ssgi_cli::kExitIO;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    print_usage(stderr);
+    return ssgi_cli::kExitUsage;
+  }
+  const std::string first = argv[1];
+  if (first == "--help" || first == "-h") {
+    print_usage(stdout);
+    return ssgi_cli::kExitOk;
+  }
+  if (first == "--version") {
+    std::printf("ssgi %s\n", ssgi::version());
+    return ssgi_cli::kExitOk;
+  }
+  for (const Subcommand& s : kSubcommands) {
+    if (first != s.name) continue;
+    try {
+      return s.run(argc - 1, argv + 1);
+    } catch (const ssgi::Error& e) {
+      if (e.file().empty())
+        std::fprintf(stderr, "ssgi: error: %s\n", e.what());
+      else
+        std::fprintf(stderr, "ssgi: error: %s: %s\n", e.file().c_str(), e.what());
+      if (e.kind() == ssgi::ErrorKind::kUsage)
+        std::fprintf(stderr, "Try 'ssgi %s --help'.\n", s.name);
+      return exit_code_for(e.kind());
+    } catch (const std::bad_alloc&) {
+      std::fprintf(stderr, "ssgi: error: out of memory\n");
+      return ssgi_cli::kExitIO;
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "ssgi: error: %s\n", e.what());
+      return ssgi_cli::kExitIO;
+    }
+  }
+  std::fprintf(stderr, "ssgi: error: unknown subcommand '%s'\n", first.c_str());
+  print_usage(stderr);
+  return ssgi_cli::kExitUsage;
+}

@@ -1,0 +1,72 @@
+// Pinhole cameras: where they come from (EXR header, sidecar, --fov) and how they project.
+#pragma once
+
+#include <string>
+
+#include "ssgi/image.h"
+
+namespace ssgi {
+
+struct Vec3d {
+  double x = 0, y = 0, z = 0;
+};
+
+// A 4x4 matrix in Imath's row-vector convention, as OpenEXR headers store it:
+// p' = p * M, translation in m[3][0..2].
+struct Mat4d {
+  double m[4][4] = {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}};
+
+  Mat4d operator*(const Mat4d& o) const;
+  // Throws Error(kInput) when singular.
+  Mat4d inverse() const;
+  // Homogeneous point transform with the divide by w.
+  Vec3d transform_point(const Vec3d& p) const;
+  // Direction transform (no translation, no divide).
+  Vec3d transform_dir(const Vec3d& d) const;
+};
+
+// A pinhole camera in the library's camera space (OpenEXR worldToCamera: x right, y up,
+// +z forward, depth positive in front) projecting onto display-window pixels, y down.
+// Pixel (i, j) has its centre at (i + 0.5, j + 0.5), i.e. NDC ((i+0.5)/W, (j+0.5)/H).
+struct Camera {
+  // px = cx + fx * x / z,  py = cy - fy * y / z  (display-window pixel units, origin at the
+  // display window's top-left corner).
+  double fx = 1, fy = 1, cx = 0, cy = 0;
+  // Whether world_to_camera is known (header matrices or sidecar); a --fov camera has none,
+  // and then world-space inputs (normals, env maps) are taken as camera-space.
+  bool has_world_transform = false;
+  Mat4d world_to_camera;
+  // Human-readable origin, e.g. "header worldToCamera/worldToNDC", "sidecar cam.json", "--fov".
+  std::string source;
+
+  // Horizontal field of view over `display_width` pixels, in degrees.
+  double hfov_deg(int display_width) const;
+  // Camera-space point to continuous display-window pixel coordinates.
+  void project(const Vec3d& p, double* px, double* py) const;
+  // Continuous display-window pixel coordinates and planar depth z to a camera-space point.
+  Vec3d unproject(double px, double py, double z) const;
+  // Unit camera-space view direction through continuous pixel coordinates.
+  Vec3d view_dir(double px, double py) const;
+};
+
+// A camera with the given horizontal field of view over the display window, centred, with
+// square pixels scaled by `pixel_aspect` (OpenEXR pixelAspectRatio = pixel width / height).
+Camera camera_from_fov(double hfov_deg, const Box2i& display_window, double pixel_aspect = 1.0);
+
+// A camera from OpenEXR's standard worldToCamera and worldToNDC attributes (NDC (0,0) top-left,
+// (1,1) bottom-right of the display window, divide by w). Throws Error(kInput) on a singular or
+// non-perspective matrix pair; `file` names the source in that error.
+Camera camera_from_matrices(const Mat4d& world_to_camera, const Mat4d& world_to_ndc,
+                            const Box2i& display_window, const std::string& file);
+
+}  // namespace ssgi
+
+namespace ssgi {
+
+// Where the user told the camera to come from; when both are empty the EXR header decides.
+struct CameraOptions {
+  double hfov_deg = 0;  // --fov: > 0 gives a static camera with this horizontal field of view
+  std::string sidecar;  // --camera FILE.json: per-frame cameras (format in man/ssgi.1)
+};
+
+}  // namespace ssgi

@@ -1,0 +1,42 @@
+// The one exception type the library throws; the CLI maps its kind to an exit code.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+namespace ssgi {
+
+// What went wrong, coarse enough to pick an exit code from (see man/ssgi.1, EXIT STATUS).
+enum class ErrorKind {
+  kUsage,     // bad option or argument value
+  kInput,     // input data unusable: missing channel, bad camera, inconsistent sequence
+  kIO,        // file missing, unreadable, truncated, not writable
+  kInternal,  // a bug: an invariant did not hold
+};
+
+class Error : public std::runtime_error {
+ public:
+  // `file` is the file the problem is about, or empty when there is none.
+  Error(ErrorKind kind, std::string file, const std::string& what)
+      : std::runtime_error(what), kind_(kind), file_(std::move(file)) {}
+
+  ErrorKind kind() const { return kind_; }
+  const std::string& file() const { return file_; }
+
+ private:
+  ErrorKind kind_;
+  std::string file_;
+};
+
+// Convenience throwers, so that call sites read as one line.
+[[noreturn]] inline void throw_usage(const std::string& what) {
+  throw Error(ErrorKind::kUsage, {}, what);
+}
+[[noreturn]] inline void throw_input(const std::string& file, const std::string& what) {
+  throw Error(ErrorKind::kInput, file, what);
+}
+[[noreturn]] inline void throw_io(const std::string& file, const std::string& what) {
+  throw Error(ErrorKind::kIO, file, what);
+}
+
+}  // namespace ssgi

@@ -1,0 +1,42 @@
+// The renderer-independent G-buffer every stage works on.
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <string>
+
+#include "ssgi/camera.h"
+#include "ssgi/image.h"
+
+namespace ssgi {
+
+// One frame's inputs after the reader converted them to the library's conventions. Every
+// image covers the data window; an image with no channels is a pass the run does not use or
+// the input does not provide.
+struct GBuffer {
+  std::string path;  // the file it was read from
+  int frame = 0;
+  Box2i display_window;
+  Box2i data_window;
+  Camera camera;
+
+  Image depth;        // 1: planar camera-space z; +inf where there is no surface
+  Image normal;       // 3: unit camera-space normal; 0 where there is no surface
+  Image albedo;       // 3: diffuse albedo
+  Image direct;       // 3: direct light the surface reflects (albedo included)
+  Image emission;     // 3 or absent
+  Image motion_prev;  // 2 or absent: display pixels, +y down, to the point in frame - 1
+  Image motion_next;  // 2 or absent: the same to frame + 1
+  Image beauty;       // 4 or absent: the renderer's composite, alpha in channel 3
+
+  int width() const { return data_window.width(); }
+  int height() const { return data_window.height(); }
+  // True where the pixel (data-window coordinates) shows a surface.
+  bool is_surface(int x, int y) const { return std::isfinite(depth.at(0, x, y)); }
+  std::size_t bytes() const {
+    return depth.bytes() + normal.bytes() + albedo.bytes() + direct.bytes() + emission.bytes() +
+           motion_prev.bytes() + motion_next.bytes() + beauty.bytes();
+  }
+};
+
+}  // namespace ssgi

@@ -1,0 +1,7 @@
+#include "ssgi/version.h"
+
+namespace ssgi {
+
+const char* version() { return SSGI_VERSION_STRING; }
+
+}  // namespace ssgi
