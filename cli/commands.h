@@ -14,6 +14,7 @@ enum ExitCode : int {
 
 // Each takes the arguments after the subcommand name (argv[0] is the subcommand) and returns
 // an exit code; ssgi::Error escaping from one is reported by main().
+int run_run(int argc, char** argv);
 int run_info(int argc, char** argv);
 int run_compare(int argc, char** argv);
 

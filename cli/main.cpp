@@ -17,6 +17,7 @@ struct Subcommand {
 };
 
 const Subcommand kSubcommands[] = {
+    {"run", "add screen-space global illumination to a sequence", ssgi_cli::run_run},
     {"info", "print the layout, cameras and processing plan of a sequence", ssgi_cli::run_info},
     {"compare", "compare images or sequences with error metrics and thresholds",
      ssgi_cli::run_compare},

@@ -1,0 +1,91 @@
+// Reading G-buffer sequences from renderer EXRs and writing result frames.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "ssgi/camera.h"
+#include "ssgi/gbuffer.h"
+#include "ssgi/layout.h"
+#include "ssgi/sequence.h"
+
+namespace ssgi {
+
+// A set of roles, as bits (1u << Role).
+using RoleMask = unsigned;
+constexpr RoleMask role_bit(Role role) { return 1u << static_cast<int>(role); }
+
+// What the user said about the input sequence.
+struct InputOptions {
+  std::string pattern;                          // e.g. "shot.####.exr"
+  std::string frames;                           // --frames; empty: the range in the pattern,
+                                                // else every frame on disk
+  bool skip_missing = false;                    // --skip-missing
+  std::string layout;                           // --layout; empty: detect
+  std::vector<std::string> channel_overrides;   // --channel ROLE=NAME
+  std::string depth_kind;                       // --depth-kind; empty: the preset's
+  CameraOptions camera;                         // --fov, --camera
+};
+
+// A sequence as found on disk, probed from its first frame.
+struct SequenceInfo {
+  SequencePattern pattern;
+  std::vector<int> frames;          // the frames to write, in order, all present on disk
+  std::vector<int> frames_on_disk;  // every frame the pattern matches, ascending
+  Box2i display_window;             // of the first frame, absolute EXR coordinates
+  Box2i data_window;
+  FileChannels channels;            // of the first frame
+  Layout layout;                    // resolved against the first frame
+  double pixel_aspect = 1.0;
+};
+
+// Resolves frames and probes the first one. Throws Error(kUsage) for a malformed pattern or
+// frame list, Error(kIO) naming the file for a missing frame (unless skip_missing, which
+// drops it with a warning) or a pattern matching nothing, Error(kInput) when the layout
+// cannot be resolved.
+SequenceInfo open_sequence(const InputOptions& options);
+
+// Reads the roles in `roles` of one frame and converts them to the library's conventions
+// (planar depth with +inf background, unit camera-space normals, direct light with albedo).
+// Reads one channel range per subimage. Throws Error(kIO) for an unreadable file and
+// Error(kInput) naming it for unusable data (missing channel, window or resolution that
+// differs from `sequence`, no camera).
+GBuffer read_gbuffer(const SequenceInfo& sequence, int frame, RoleMask roles,
+                     const InputOptions& options);
+
+// The camera of one frame, from its header alone (or the options' sidecar / field of view).
+Camera read_camera(const SequenceInfo& sequence, int frame, const InputOptions& options);
+
+// Sets how many threads OpenImageIO and OpenEXR use (0: their default).
+void set_io_threads(int threads);
+
+// A layer of results to write: channels `<prefix><name>.<suffix>` from the planes of `image`
+// (an empty name writes bare `<prefix><suffix>`, as the composite's R, G, B, A).
+struct OutputLayer {
+  std::string name;
+  const Image* image = nullptr;
+  std::vector<std::string> suffixes;
+};
+
+// How to write result frames.
+struct WriteOptions {
+  std::string compression = "zip";  // OIIO spelling, e.g. "zip", "dwaa:45", "none"
+  bool half = false;                // write our channels as half (clamped to +-65504)
+  bool passthrough = true;          // copy the input's channels
+  std::string layer_prefix;         // --layer-prefix, with its trailing '.'
+  std::vector<std::pair<std::string, std::string>> provenance;  // extra string attributes
+  bool warn_collisions = true;      // warn when an input channel is renamed to input.<name>
+};
+
+// Validates --compression (zip|zips|piz|rle|pxr24|b44|b44a|dwaa[:level]|dwab[:level]|none) and
+// returns OIIO's spelling. Throws Error(kUsage) otherwise.
+std::string parse_compression(const std::string& spec);
+
+// Writes `layers` (covering `frame`'s data window) to `path` with the input's header and,
+// when asked, its channels. Written to a temporary file in the same directory, then renamed,
+// so a failure never leaves a partial frame. Throws Error(kIO) naming `path` on failure.
+void write_frame(const std::string& path, const GBuffer& frame,
+                 const std::vector<OutputLayer>& layers, const WriteOptions& options);
+
+}  // namespace ssgi

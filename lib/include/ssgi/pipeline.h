@@ -1,0 +1,60 @@
+// The GI pipeline: the plan of what runs, and the per-frame stages from directions to
+// composite.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "ssgi/gbuffer.h"
+#include "ssgi/io.h"
+#include "ssgi/settings.h"
+
+namespace ssgi {
+
+// What a run does, decided once from what the inputs provide and what the user asked: the
+// only place that chooses stages, channels and buffers.
+struct Plan {
+  RoleMask roles = 0;            // the channels the reader reads
+  bool gather_emission = false;  // emission is part of the light rays pick up
+  bool cache_hits = false;       // several bounces re-gather the first bounce's hits
+  bool env_map = false;          // misses look up an environment map
+  bool denoise = false;
+  TemporalMode temporal = TemporalMode::kNone;
+  std::vector<std::string> reasons;  // one line per decision, for `ssgi info` and -v
+};
+
+// Decides the plan for `sequence` under `settings`.
+Plan make_plan(const SequenceInfo& sequence, const GiSettings& settings);
+
+// One frame's results, each covering the data window.
+struct FrameResult {
+  Image indirect;   // 3: diffuse indirect light without albedo (Cycles' DiffInd)
+  Image gi;         // 3: albedo x indirect
+  Image composite;  // 4: direct + emission + gi on surfaces, the input beauty elsewhere
+};
+
+class Pipeline {
+ public:
+  // Loads what the whole run shares (the environment map). Throws ssgi::Error.
+  Pipeline(const SequenceInfo& sequence, const GiSettings& settings);
+  ~Pipeline();
+  Pipeline(const Pipeline&) = delete;
+  Pipeline& operator=(const Pipeline&) = delete;
+
+  const Plan& plan() const;
+  const GiSettings& settings() const;
+
+  // Directions, march, misses, bounces and denoise: the frame's indirect light (3 channels),
+  // before any temporal filtering.
+  Image indirect_light(const GBuffer& frame) const;
+
+  // The composite stage: outputs from the (temporally filtered) indirect light.
+  FrameResult composite(const GBuffer& frame, Image indirect) const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace ssgi

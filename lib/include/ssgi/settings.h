@@ -1,0 +1,53 @@
+// The settings of a GI run: everything `ssgi run` options control besides input and output.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+
+namespace ssgi {
+
+enum class DenoiseMode { kNone, kPyramid };
+enum class TemporalMode { kNone, kEma, kWindow };
+
+// The seed's denoise pyramid: a joint bilateral filter at 1/4 resolution, then bilateral
+// upsampling with a blur at 1/2 and full resolution. Weights are Gaussian in each term.
+struct DenoiseSettings {
+  int levels = 2;              // downsampling steps: 2 filters at 1/4 resolution
+  int radius = 2;              // joint bilateral kernel radius in pixels at the coarsest level
+  float sigma_spatial = 1.5f;  // spatial Gaussian, pixels at the coarsest level
+  // Depth term: relative depth difference |z_q - z_p| / z_p at which the weight is exp(-1/2).
+  float sigma_depth = 0.02f;
+  // Normal term: weight = max(0, dot(n_p, n_q))^normal_power.
+  float normal_power = 32.0f;
+  int upsample_blur_radius = 1;  // the blur after each bilateral upsampling step
+};
+
+// Everything that decides the GI result of a frame.
+struct GiSettings {
+  int rays = 8;           // hemisphere rays per pixel and bounce
+  int max_steps = 64;     // march samples per ray at most
+  // Longest ray, in camera-space scene units; 0: until the ray leaves the screen.
+  double max_distance = 0;
+  // Surface model (lib/src/surface_model.h): a depth pixel is a slab from its depth z to
+  // z * (1 + thickness) behind it.
+  double thickness = 0.1;
+  // A ray starts this fraction of the pixel's depth off the surface along its normal, so that
+  // it does not hit its own pixel.
+  double start_offset = 0.002;
+  int bounces = 2;
+  // Misses: the environment map (lat-long EXR, empty for none) or else this colour.
+  std::string env_map;
+  char env_up = 'y';  // the map's up axis in world space: 'y' (OpenEXR) or 'z' (Blender)
+  std::array<float, 3> env_color = {0, 0, 0};
+  // Gather emission at hits: -1 the preset decides, 0 no, 1 yes.
+  int gather_emission = -1;
+  DenoiseMode denoise = DenoiseMode::kPyramid;
+  DenoiseSettings denoise_settings;
+  TemporalMode temporal = TemporalMode::kNone;
+  int temporal_radius = 2;     // window: +-K frames
+  float ema_alpha = 0.1f;      // EMA: weight of the current frame
+  std::uint32_t seed = 0;
+};
+
+}  // namespace ssgi

@@ -1,0 +1,17 @@
+// The composite stage: the output layers from the G-buffer and the indirect light.
+#pragma once
+
+#include "ssgi/gbuffer.h"
+#include "ssgi/pipeline.h"
+
+namespace ssgi::detail {
+
+// gi = albedo x indirect; composite = direct + emission + gi on surfaces, the input beauty
+// (or 0) on background pixels; alpha from the beauty, else 1.
+FrameResult composite_frame(const GBuffer& g, Image indirect);
+
+// The light a surface reflects towards others: direct (albedo included), plus emission when
+// `with_emission`; 0 on background.
+Image reflected_radiance(const GBuffer& g, bool with_emission);
+
+}  // namespace ssgi::detail

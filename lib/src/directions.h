@@ -1,0 +1,31 @@
+// Stochastic hemisphere directions: animated Interleaved Gradient Noise rotating a
+// low-discrepancy sequence, mapped to cosine-weighted directions around the normal.
+#pragma once
+
+#include <cstdint>
+
+namespace ssgi::detail {
+
+struct Vec3f {
+  float x, y, z;
+};
+
+// Per-pixel random rotation of the ray set, a pure function of the display-window pixel,
+// the frame and the seed (never of the data window, threads or crops).
+struct PixelNoise {
+  double u1, u2, jitter;
+};
+PixelNoise pixel_noise(int display_x, int display_y, int frame, std::uint32_t seed);
+
+// Interleaved Gradient Noise (Jimenez 2014) at a continuous pixel position, in [0, 1).
+double interleaved_gradient_noise(double x, double y);
+
+// Sample `k` of the per-pixel set: the R2 sequence (Roberts 2018) point k, rotated by `noise`
+// (Cranley-Patterson), so that a pixel's rays are stratified and neighbouring pixels differ.
+void ray_sample(const PixelNoise& noise, int k, float* u1, float* u2, float* jitter);
+
+// Cosine-weighted direction around the unit normal `n` from two uniforms (Malley's method,
+// with the branchless orthonormal basis of Duff et al. 2017).
+Vec3f cosine_hemisphere(const Vec3f& n, float u1, float u2);
+
+}  // namespace ssgi::detail

@@ -1,0 +1,395 @@
+// Reading renderer EXR sequences into the library's G-buffer.
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <memory>
+#include <regex>
+
+#include "camera_header.h"
+#include "ssgi/error.h"
+#include "ssgi/io.h"
+#include "ssgi/log.h"
+
+namespace ssgi {
+namespace {
+
+namespace fs = std::filesystem;
+
+// OIIO's messages can span lines; ours are one line.
+std::string one_line(std::string s) {
+  std::replace(s.begin(), s.end(), '\n', ' ');
+  while (!s.empty() && s.back() == ' ') s.pop_back();
+  return s;
+}
+
+std::unique_ptr<OIIO::ImageInput> open_image(const std::string& path) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw_io(path, "no such file");
+  if (fs::is_directory(path, ec)) throw_io(path, "is a directory, not an image");
+  if (fs::file_size(path, ec) == 0) throw_io(path, "empty file");
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) throw_io(path, "cannot read image: " + one_line(OIIO::geterror()));
+  if (std::string(in->format_name()) != "openexr")
+    throw_io(path, std::string("not an OpenEXR file (") + in->format_name() + ")");
+  return in;
+}
+
+Box2i display_window_of(const OIIO::ImageSpec& spec) {
+  return {spec.full_x, spec.full_y, spec.full_x + spec.full_width,
+          spec.full_y + spec.full_height};
+}
+
+Box2i data_window_of(const OIIO::ImageSpec& spec) {
+  return {spec.x, spec.y, spec.x + spec.width, spec.y + spec.height};
+}
+
+FileChannels probe_channels(OIIO::ImageInput& in) {
+  FileChannels file;
+  for (int s = 0; in.seek_subimage(s, 0); ++s) {
+    const OIIO::ImageSpec& spec = in.spec();
+    file.subimage_names.push_back(spec.get_string_attribute("oiio:subimagename"));
+    file.channels.push_back(spec.channelnames);
+    if (s == 0) {
+      for (const OIIO::ParamValue& p : spec.extra_attribs)
+        file.attributes[p.name().string()] = p.get_string();
+    }
+  }
+  in.seek_subimage(0, 0);
+  return file;
+}
+
+// A plain file name ending in digits (`shot.0005.exr`) is frame 5 of `shot.####.exr`, so a
+// single-file run keys its noise to the same frame as a sequence run would.
+SequencePattern pattern_for_single_file(const std::string& name, std::vector<int>* frames) {
+  static const std::regex kTrailingFrame(R"(^(.*[._])(-?)([0-9]+)(\.[A-Za-z0-9]+)$)");
+  std::smatch m;
+  SequencePattern pattern;
+  if (std::regex_match(name, m, kTrailingFrame) && m[3].length() <= 9) {
+    pattern.prefix = m[1];
+    pattern.suffix = m[4];
+    pattern.padding = static_cast<int>(m[3].length());
+    pattern.has_frame_field = true;
+    const int frame = std::stoi(m[3]);
+    frames->assign(1, m[2].length() ? -frame : frame);
+  } else {
+    pattern.prefix = name;
+    frames->assign(1, 0);
+  }
+  return pattern;
+}
+
+void check_windows(const SequenceInfo& seq, const OIIO::ImageSpec& spec, const std::string& path) {
+  const Box2i display = display_window_of(spec);
+  const Box2i data = data_window_of(spec);
+  if (data.empty()) throw_input(path, "data window is empty (zero pixels)");
+  if (display != seq.display_window)
+    throw_input(path, "display window " + std::to_string(display.width()) + "x" +
+                          std::to_string(display.height()) +
+                          " differs from the first frame's " +
+                          std::to_string(seq.display_window.width()) + "x" +
+                          std::to_string(seq.display_window.height()));
+  if (data != seq.data_window)
+    throw_input(path, "data window differs from the first frame's");
+}
+
+// Reads the channels `wanted` (by full name) of one subimage with a single channel-range read:
+// OIIO 2.4 decompresses every ZIP block again for each read, so one covering range is cheaper
+// than one read per role. Returns one plane per wanted channel.
+std::vector<std::vector<float>> read_channels(OIIO::ImageInput& in, int subimage,
+                                              const std::vector<std::string>& wanted,
+                                              const std::string& path) {
+  if (!in.seek_subimage(subimage, 0))
+    throw_input(path, "has no subimage " + std::to_string(subimage));
+  const OIIO::ImageSpec& spec = in.spec();
+  std::vector<int> index(wanted.size());
+  int lo = std::numeric_limits<int>::max(), hi = -1;
+  for (std::size_t i = 0; i < wanted.size(); ++i) {
+    const auto it = std::find(spec.channelnames.begin(), spec.channelnames.end(), wanted[i]);
+    if (it == spec.channelnames.end()) throw_input(path, "has no channel '" + wanted[i] + "'");
+    index[i] = static_cast<int>(it - spec.channelnames.begin());
+    lo = std::min(lo, index[i]);
+    hi = std::max(hi, index[i]);
+  }
+  const int n = hi - lo + 1;
+  const std::size_t pixels = static_cast<std::size_t>(spec.width) * spec.height;
+  std::vector<float> interleaved(pixels * n);
+  if (!in.read_image(subimage, 0, lo, hi + 1, OIIO::TypeDesc::FLOAT, interleaved.data()))
+    throw_io(path, "cannot read pixels: " + one_line(in.geterror()));
+  std::vector<std::vector<float>> planes(wanted.size(), std::vector<float>(pixels));
+  for (std::size_t i = 0; i < wanted.size(); ++i) {
+    const int c = index[i] - lo;
+    for (std::size_t p = 0; p < pixels; ++p) planes[i][p] = interleaved[p * n + c];
+  }
+  return planes;
+}
+
+// Copies role planes into an Image, replacing NaN by 0 and +-inf by +-kHuge, so that nothing
+// downstream sees a non-finite input value (depth has its own rules).
+constexpr float kHuge = 1e30f;
+
+float finite_or(float v, float nan_value) {
+  if (std::isnan(v)) return nan_value;
+  return std::clamp(v, -kHuge, kHuge);
+}
+
+Image to_image(const std::vector<std::vector<float>>& planes, int w, int h) {
+  Image img(w, h, static_cast<int>(planes.size()));
+  for (int c = 0; c < img.channels(); ++c) {
+    float* dst = img.plane(c);
+    for (std::size_t p = 0; p < img.plane_size(); ++p) dst[p] = finite_or(planes[c][p], 0.0f);
+  }
+  return img;
+}
+
+Camera find_camera(const InputOptions& options, const OIIO::ImageSpec& spec, int frame,
+                   const Box2i& display, double pixel_aspect, const std::string& path) {
+  if (!options.camera.sidecar.empty())
+    return detail::camera_from_sidecar(options.camera.sidecar, frame, display);
+  if (options.camera.hfov_deg > 0) return camera_from_fov(options.camera.hfov_deg, display,
+                                                          pixel_aspect);
+  if (auto camera = detail::camera_from_header(spec, display, path)) return *camera;
+  throw_input(path,
+              "no camera: the header has no worldToCamera/worldToNDC; give --fov or --camera");
+}
+
+DepthKind depth_kind_for(const SequenceInfo& seq, const InputOptions& options) {
+  if (options.depth_kind.empty()) return seq.layout.preset.depth_kind;
+  DepthKind kind;
+  if (!parse_depth_kind(options.depth_kind, &kind))
+    throw_usage("unknown --depth-kind '" + options.depth_kind +
+                "' (planar, radial, inverse, negative)");
+  return kind;
+}
+
+// Planar camera z from the stored depth; +inf where there is no surface.
+void convert_depth(Image& depth, DepthKind kind, double background, const Camera& camera,
+                   const Box2i& display, const Box2i& data) {
+  const float inf = std::numeric_limits<float>::infinity();
+  for (int y = 0; y < depth.height(); ++y) {
+    for (int x = 0; x < depth.width(); ++x) {
+      float& d = depth.at(0, x, y);
+      const float v = d;
+      double z = v;
+      switch (kind) {
+        case DepthKind::kPlanarZ:
+          break;
+        case DepthKind::kNegativeZ:
+          z = -static_cast<double>(v);
+          break;
+        case DepthKind::kInverseZ:
+          z = v > 0 ? 1.0 / v : inf;
+          break;
+        case DepthKind::kRadial: {
+          const double px = x + data.x0 - display.x0 + 0.5;
+          const double py = y + data.y0 - display.y0 + 0.5;
+          z = static_cast<double>(v) * camera.view_dir(px, py).z;
+          break;
+        }
+      }
+      const bool surface = std::isfinite(z) && z > 0 && z < background && std::isfinite(v);
+      d = surface ? static_cast<float>(z) : inf;
+    }
+  }
+}
+
+// Unit camera-space normals facing the camera. World-space normals go through the inverse
+// transpose of worldToCamera (row-vector convention: n' = n * inverse(M)^T). A zero, NaN or
+// back-facing normal is replaced by (or flipped towards) the direction to the camera, so that
+// every surface pixel has a usable hemisphere.
+void convert_normals(Image& normal, const Image& depth, NormalSpace space, const Camera& camera,
+                     const Box2i& display, const Box2i& data) {
+  const bool to_camera = space == NormalSpace::kWorld && camera.has_world_transform;
+  Mat4d inv;
+  if (to_camera) inv = camera.world_to_camera.inverse();
+  for (int y = 0; y < normal.height(); ++y) {
+    for (int x = 0; x < normal.width(); ++x) {
+      if (!std::isfinite(depth.at(0, x, y))) {
+        for (int c = 0; c < 3; ++c) normal.at(c, x, y) = 0.0f;
+        continue;
+      }
+      Vec3d n{normal.at(0, x, y), normal.at(1, x, y), normal.at(2, x, y)};
+      if (to_camera) {
+        n = {n.x * inv.m[0][0] + n.y * inv.m[0][1] + n.z * inv.m[0][2],
+             n.x * inv.m[1][0] + n.y * inv.m[1][1] + n.z * inv.m[1][2],
+             n.x * inv.m[2][0] + n.y * inv.m[2][1] + n.z * inv.m[2][2]};
+      }
+      const Vec3d view = camera.view_dir(x + data.x0 - display.x0 + 0.5,
+                                         y + data.y0 - display.y0 + 0.5);
+      const double len = std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
+      if (!(len > 1e-6) || !std::isfinite(len)) {
+        n = {-view.x, -view.y, -view.z};
+      } else {
+        n = {n.x / len, n.y / len, n.z / len};
+        if (n.x * view.x + n.y * view.y + n.z * view.z > 0) n = {-n.x, -n.y, -n.z};
+      }
+      normal.at(0, x, y) = static_cast<float>(n.x);
+      normal.at(1, x, y) = static_cast<float>(n.y);
+      normal.at(2, x, y) = static_cast<float>(n.z);
+    }
+  }
+}
+
+// Motion in the library's convention: display pixels, +y down, offsets to frame -1 and +1.
+void convert_motion(const std::vector<std::vector<float>>& planes, const MotionConvention& mc,
+                    const Box2i& display, int w, int h, GBuffer* g) {
+  const double sx = mc.in_ndc ? display.width() : mc.scale;
+  const double sy = (mc.in_ndc ? display.height() : mc.scale) * (mc.y_up ? -1.0 : 1.0);
+  Image xy(w, h, 2);
+  for (std::size_t p = 0; p < xy.plane_size(); ++p) {
+    xy.plane(0)[p] = static_cast<float>(finite_or(planes[0][p], 0.0f) * sx);
+    xy.plane(1)[p] = static_cast<float>(finite_or(planes[1][p], 0.0f) * sy);
+  }
+  if (mc.xy_to_previous) {
+    g->motion_prev = std::move(xy);
+  } else {
+    g->motion_next = std::move(xy);
+  }
+  if (mc.zw_current_minus_next && planes.size() >= 4) {
+    // Stored as current - next: the offset to the next frame is its negation.
+    Image next(w, h, 2);
+    for (std::size_t p = 0; p < next.plane_size(); ++p) {
+      next.plane(0)[p] = static_cast<float>(-finite_or(planes[2][p], 0.0f) * sx);
+      next.plane(1)[p] = static_cast<float>(-finite_or(planes[3][p], 0.0f) * sy);
+    }
+    g->motion_next = std::move(next);
+  }
+}
+
+}  // namespace
+
+void set_io_threads(int threads) {
+  OIIO::attribute("threads", threads);
+  OIIO::attribute("exr_threads", threads);
+}
+
+SequenceInfo open_sequence(const InputOptions& options) {
+  SequenceInfo seq;
+  std::vector<int> frames_in_name;
+  seq.pattern = parse_sequence_pattern(options.pattern, &frames_in_name);
+  if (!seq.pattern.has_frame_field) {
+    seq.pattern = pattern_for_single_file(options.pattern, &frames_in_name);
+    if (!fs::exists(options.pattern)) throw_io(options.pattern, "no such file");
+  }
+  seq.frames_on_disk = seq.pattern.has_frame_field && frames_in_name.size() != 1
+                           ? find_frames_on_disk(seq.pattern)
+                           : std::vector<int>();
+  std::vector<int> wanted;
+  if (!options.frames.empty())
+    wanted = parse_frame_list(options.frames);
+  else if (!frames_in_name.empty())
+    wanted = frames_in_name;
+  else
+    wanted = seq.frames_on_disk;
+  if (wanted.empty()) throw_io(options.pattern, "no files match this pattern");
+  if (seq.frames_on_disk.empty()) {
+    for (int f : wanted)
+      if (fs::exists(seq.pattern.path_for(f))) seq.frames_on_disk.push_back(f);
+    std::sort(seq.frames_on_disk.begin(), seq.frames_on_disk.end());
+  }
+  for (int f : wanted) {
+    if (std::binary_search(seq.frames_on_disk.begin(), seq.frames_on_disk.end(), f)) {
+      seq.frames.push_back(f);
+    } else if (options.skip_missing) {
+      log_warning(seq.pattern.path_for(f) + ": frame " + std::to_string(f) +
+                  " is missing; skipped");
+    } else {
+      throw_io(seq.pattern.path_for(f), "frame " + std::to_string(f) + " is missing");
+    }
+  }
+  if (seq.frames.empty()) throw_io(options.pattern, "none of the requested frames exist");
+
+  const std::string first = seq.pattern.path_for(seq.frames.front());
+  auto in = open_image(first);
+  seq.channels = probe_channels(*in);
+  const OIIO::ImageSpec& spec = in->spec();
+  seq.display_window = display_window_of(spec);
+  seq.data_window = data_window_of(spec);
+  if (seq.data_window.empty()) throw_input(first, "data window is empty (zero pixels)");
+  seq.pixel_aspect = spec.get_float_attribute("PixelAspectRatio", 1.0f);
+  if (!(seq.pixel_aspect > 0) || !std::isfinite(seq.pixel_aspect)) seq.pixel_aspect = 1.0;
+  seq.layout = resolve_layout(seq.channels, options.layout, options.channel_overrides, first);
+  return seq;
+}
+
+Camera read_camera(const SequenceInfo& seq, int frame, const InputOptions& options) {
+  const std::string path = seq.pattern.path_for(frame);
+  auto in = open_image(path);
+  return find_camera(options, in->spec(), frame, seq.display_window, seq.pixel_aspect, path);
+}
+
+GBuffer read_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
+                     const InputOptions& options) {
+  const std::string path = seq.pattern.path_for(frame);
+  auto in = open_image(path);
+  const OIIO::ImageSpec spec = in->spec();
+  check_windows(seq, spec, path);
+
+  GBuffer g;
+  g.path = path;
+  g.frame = frame;
+  g.display_window = seq.display_window;
+  g.data_window = seq.data_window;
+  g.camera = find_camera(options, spec, frame, seq.display_window, seq.pixel_aspect, path);
+  const int w = g.width(), h = g.height();
+
+  // Group the wanted channels by subimage so that each subimage is read once.
+  std::map<int, std::vector<std::string>> by_subimage;
+  for (int r = 0; r < kRoleCount; ++r) {
+    if (!(roles & role_bit(static_cast<Role>(r)))) continue;
+    for (const ChannelRef& c : seq.layout.roles[r]) by_subimage[c.subimage].push_back(c.name);
+  }
+  std::map<std::pair<int, std::string>, std::vector<float>> planes;
+  for (const auto& [subimage, names] : by_subimage) {
+    auto read = read_channels(*in, subimage, names, path);
+    for (std::size_t i = 0; i < names.size(); ++i)
+      planes[{subimage, names[i]}] = std::move(read[i]);
+  }
+  auto role_planes = [&](Role role) {
+    std::vector<std::vector<float>> out;
+    for (const ChannelRef& c : seq.layout.channels(role))
+      out.push_back(planes.at({c.subimage, c.name}));
+    return out;
+  };
+  auto wanted = [&](Role role) { return (roles & role_bit(role)) && seq.layout.has(role); };
+
+  const LayoutPreset& preset = seq.layout.preset;
+  if (roles & role_bit(Role::kDepth)) {
+    if (!seq.layout.has(Role::kDepth)) throw_input(path, "has no depth channel");
+    g.depth = Image(w, h, 1);
+    auto depth = role_planes(Role::kDepth);
+    std::copy(depth[0].begin(), depth[0].end(), g.depth.plane(0));
+    convert_depth(g.depth, depth_kind_for(seq, options), preset.background_depth, g.camera,
+                  g.display_window, g.data_window);
+  }
+  if (roles & role_bit(Role::kNormal)) {
+    if (!seq.layout.has(Role::kNormal)) throw_input(path, "has no normal channels");
+    g.normal = to_image(role_planes(Role::kNormal), w, h);
+    convert_normals(g.normal, g.depth, preset.normal_space, g.camera, g.display_window,
+                    g.data_window);
+  }
+  if (wanted(Role::kAlbedo)) g.albedo = to_image(role_planes(Role::kAlbedo), w, h);
+  if (wanted(Role::kDirect)) {
+    g.direct = to_image(role_planes(Role::kDirect), w, h);
+    if (!preset.direct_includes_albedo) {
+      if (g.albedo.empty()) throw_input(path, "direct light excludes albedo but there is none");
+      for (int c = 0; c < 3; ++c)
+        for (std::size_t p = 0; p < g.direct.plane_size(); ++p)
+          g.direct.plane(c)[p] = finite_or(g.direct.plane(c)[p] * g.albedo.plane(c)[p], 0.0f);
+    }
+  }
+  if (wanted(Role::kEmission)) g.emission = to_image(role_planes(Role::kEmission), w, h);
+  if (wanted(Role::kMotion))
+    convert_motion(role_planes(Role::kMotion), preset.motion, g.display_window, w, h, &g);
+  if (wanted(Role::kBeauty)) {
+    auto beauty = role_planes(Role::kBeauty);
+    if (beauty.size() < 4) beauty.emplace_back(static_cast<std::size_t>(w) * h, 1.0f);
+    g.beauty = to_image(beauty, w, h);
+  }
+  return g;
+}
+
+}  // namespace ssgi

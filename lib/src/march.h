@@ -1,0 +1,35 @@
+// Screen-space ray march: hemisphere rays from every surface pixel, marched through the depth
+// buffer (the surface model of surface_model.h) until they hit a pixel or miss.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "environment.h"
+#include "ssgi/gbuffer.h"
+#include "ssgi/settings.h"
+
+namespace ssgi::detail {
+
+// Where each ray of each pixel ended, kept so that further bounces re-gather without
+// re-marching: the hit pixel's index (y * width + x, data window) or -1 for a miss, and per
+// pixel the sum of the environment radiance its missing rays brought.
+struct RayHits {
+  int rays = 0;
+  std::vector<std::int32_t> hit;  // width * height * rays
+  Image miss_sum;                 // 3 channels
+};
+
+// Marches settings.rays rays per surface pixel and records their ends.
+RayHits march_screen_space(const GBuffer& g, const GiSettings& settings,
+                           const Environment& env);
+
+// Indirect light per pixel: the mean over its rays of `radiance` at the hit pixel, or the
+// environment for a miss. Background pixels get 0.
+Image gather_indirect(const GBuffer& g, const RayHits& hits, const Image& radiance);
+
+// march_screen_space followed by gather_indirect, without storing the hits (one bounce).
+Image march_and_gather(const GBuffer& g, const GiSettings& settings, const Environment& env,
+                       const Image& radiance);
+
+}  // namespace ssgi::detail

@@ -1,0 +1,26 @@
+// The one wrapper around TBB: every parallel loop in the library goes through here.
+#pragma once
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+namespace ssgi::detail {
+
+// Calls body(y) for every row y in [0, rows), in parallel. Rows are independent and each
+// writes only its own outputs, so the result does not depend on the thread count.
+template <typename Body>
+void parallel_for_rows(int rows, const Body& body) {
+  tbb::parallel_for(tbb::blocked_range<int>(0, rows), [&](const tbb::blocked_range<int>& r) {
+    for (int y = r.begin(); y < r.end(); ++y) body(y);
+  });
+}
+
+// Calls body(i) for every i in [0, count), in parallel, one item per task when items are big.
+template <typename Body>
+void parallel_for_each_index(int count, const Body& body) {
+  tbb::parallel_for(tbb::blocked_range<int>(0, count, 1), [&](const tbb::blocked_range<int>& r) {
+    for (int i = r.begin(); i < r.end(); ++i) body(i);
+  });
+}
+
+}  // namespace ssgi::detail

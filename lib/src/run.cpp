@@ -1,0 +1,91 @@
+// The frame loop of `ssgi run`.
+#include "ssgi/run.h"
+
+#include <chrono>
+#include <filesystem>
+
+#include "ssgi/log.h"
+#include "ssgi/pipeline.h"
+#include "ssgi/version.h"
+
+namespace ssgi {
+namespace {
+
+namespace fs = std::filesystem;
+
+// True when `a` and `b` name the same file, or would once `a` is written.
+bool same_file(const std::string& a, const std::string& b) {
+  std::error_code ec;
+  if (fs::exists(a, ec) && fs::exists(b, ec)) return fs::equivalent(a, b, ec);
+  return fs::weakly_canonical(a, ec) == fs::weakly_canonical(b, ec);
+}
+
+void check_outputs(const SequenceInfo& seq, const SequencePattern& out,
+                   const std::string& out_spec) {
+  if (!out.has_frame_field && seq.frames.size() > 1)
+    throw_usage("output '" + out_spec + "' has no frame field (e.g. ####) but " +
+                std::to_string(seq.frames.size()) + " frames are to be written");
+  for (int f : seq.frames) {
+    for (int g : seq.frames_on_disk) {
+      if (same_file(out.path_for(f), seq.pattern.path_for(g)))
+        throw_usage("output " + out.path_for(f) + " would overwrite input frame " +
+                    std::to_string(g));
+    }
+  }
+}
+
+}  // namespace
+
+int RunReport::failed() const {
+  int n = 0;
+  for (const FrameReport& f : frames) n += f.ok ? 0 : 1;
+  return n;
+}
+
+RunReport run_sequence(const RunOptions& options, const FrameCallback& on_frame) {
+  const SequenceInfo seq = open_sequence(options.input);
+  const SequencePattern out = parse_sequence_pattern(options.output);
+  check_outputs(seq, out, options.output);
+  const Pipeline pipeline(seq, options.gi);
+  const Plan& plan = pipeline.plan();
+  for (const std::string& reason : plan.reasons) log_info("plan: " + reason);
+
+  WriteOptions write = options.write;
+  write.provenance.emplace_back("ssgi:version", version());
+  write.provenance.emplace_back("ssgi:seed", std::to_string(options.gi.seed));
+
+  RunReport report;
+  const int total = static_cast<int>(seq.frames.size());
+  for (int i = 0; i < total; ++i) {
+    const auto start = std::chrono::steady_clock::now();
+    FrameReport fr;
+    fr.frame = seq.frames[i];
+    fr.input = seq.pattern.path_for(fr.frame);
+    fr.output = out.path_for(fr.frame);
+    try {
+      const GBuffer g = read_gbuffer(seq, fr.frame, plan.roles, options.input);
+      FrameResult result = pipeline.composite(g, pipeline.indirect_light(g));
+      write_frame(fr.output, g,
+                  {{"", &result.composite, {"R", "G", "B", "A"}},
+                   {"indirect", &result.indirect, {"R", "G", "B"}},
+                   {"gi", &result.gi, {"R", "G", "B"}}},
+                  write);
+      write.warn_collisions = false;  // one warning per run is enough
+      fr.ok = true;
+    } catch (const Error& e) {
+      fr.error_kind = e.kind();
+      fr.error_file = e.file();
+      fr.error = e.what();
+    } catch (const std::bad_alloc&) {
+      fr.error_kind = ErrorKind::kIO;
+      fr.error_file = fr.input;
+      fr.error = "out of memory";
+    }
+    fr.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    report.frames.push_back(fr);
+    if (on_frame) on_frame(report.frames.back(), i + 1, total);
+  }
+  return report;
+}
+
+}  // namespace ssgi
