@@ -1,0 +1,904 @@
+// Channel layout presets, their detection from channel names and header attributes, and
+// --channel overrides.
+#include "ssgi/layout.h"
+
+#include <algorithm>
+#include <cstddef>
+#include <set>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "ssgi/error.h"
+
+namespace ssgi {
+namespace {
+
+constexpr const char* kRoleNames[kRoleCount] = {"depth",    "normal", "albedo",   "direct",
+                                                "emission", "motion", "position", "beauty"};
+
+constexpr const char* kPartPrefix = "part:";
+
+// Component names a role's channels may carry, tried in order; a role resolves with the first
+// set that has all of its required components. Renderers differ: Blender writes X Y Z for
+// vectors, Arnold R G B or X Y Z by AOV type, RenderMan lower case, Nuke u v for motion and
+// red green blue in its own layer notation.
+const std::vector<std::vector<std::string>>& component_sets(Role role) {
+  static const std::vector<std::vector<std::string>> kDepth = {{"Z"}, {"V"}, {"R"}, {"z"}, {"r"}};
+  static const std::vector<std::vector<std::string>> kVector = {
+      {"X", "Y", "Z"}, {"x", "y", "z"}, {"R", "G", "B"}, {"r", "g", "b"}, {"red", "green", "blue"}};
+  static const std::vector<std::vector<std::string>> kColour = {
+      {"R", "G", "B"}, {"r", "g", "b"}, {"red", "green", "blue"}};
+  static const std::vector<std::vector<std::string>> kMotion = {
+      {"X", "Y", "Z", "W"}, {"x", "y", "z", "w"}, {"R", "G", "B", "A"},
+      {"r", "g", "b", "a"}, {"u", "v"},           {"red", "green", "blue", "alpha"}};
+  static const std::vector<std::vector<std::string>> kBeauty = {
+      {"R", "G", "B", "A"}, {"r", "g", "b", "a"}, {"red", "green", "blue", "alpha"}};
+  switch (role) {
+    case Role::kDepth:
+      return kDepth;
+    case Role::kNormal:
+    case Role::kPosition:
+      return kVector;
+    case Role::kMotion:
+      return kMotion;
+    case Role::kBeauty:
+      return kBeauty;
+    case Role::kAlbedo:
+    case Role::kDirect:
+    case Role::kEmission:
+      break;
+  }
+  return kColour;
+}
+
+// Channel counts a role accepts, largest first: optional components come as a whole (motion's
+// Z W are the second vector, read as a pair or not at all).
+std::vector<int> allowed_counts(Role role) {
+  switch (role) {
+    case Role::kMotion:
+      return {4, 2};
+    case Role::kBeauty:
+      return {4, 3};
+    default:
+      return {role_min_components(role)};
+  }
+}
+
+// A header test that identifies a renderer.
+struct Signature {
+  enum class Kind { kKey, kKeyPrefix, kSoftware };
+  Kind kind;
+  std::string text;  // the key, the key prefix, or a substring of the Software attribute
+};
+
+struct PresetEntry {
+  LayoutPreset preset;
+  std::vector<Signature> signature;
+};
+
+void set_candidates(LayoutPreset* p, Role role, std::vector<std::string> candidates) {
+  p->candidates[static_cast<int>(role)] = std::move(candidates);
+}
+
+// The preset table. Each entry says where its names and conventions come from; where a
+// convention could not be confirmed from the renderer's own documentation the comment says so,
+// and the value is the most plausible one, to be corrected with --channel or a new preset.
+std::vector<PresetEntry> build_presets() {
+  std::vector<PresetEntry> table;
+
+  {
+    // Pass names: short ones (2.8 to 4.x) from RE_PASSNAME_* in Blender's
+    // source/blender/makesdna/DNA_scene_types.h; the long ones ("Diffuse Color", "Emission",
+    // ...) from DNA_scene_enums.h in current Blender main (the first release with them was
+    // not confirmed here). Multilayer EXR channels are <view layer>.<pass>.<component>, any
+    // view layer name, matched by layer suffix. Normal and Position are world space ("Surface
+    // normals in world space", manual); Diffuse Direct excludes the BSDF colour ("BSDF color
+    // is not included in this pass", manual). Depth is planar camera z, background 1e10, and
+    // Vector is XY = previous - current, ZW = current - next in pixels with y up: measured on
+    // the Cycles sample data (/work/shared/data/README.md). Cycles samples emitters as lights.
+    PresetEntry e;
+    LayoutPreset& p = e.preset;
+    p.name = "blender";
+    p.renderer = "Blender Cycles / EEVEE (multilayer EXR)";
+    set_candidates(&p, Role::kDepth, {"Depth"});
+    set_candidates(&p, Role::kNormal, {"Normal"});
+    set_candidates(&p, Role::kAlbedo, {"DiffCol", "Diffuse Color"});
+    set_candidates(&p, Role::kDirect, {"DiffDir", "Diffuse Direct"});
+    set_candidates(&p, Role::kEmission, {"Emit", "Emission"});
+    set_candidates(&p, Role::kMotion, {"Vector"});
+    set_candidates(&p, Role::kPosition, {"Position"});
+    set_candidates(&p, Role::kBeauty, {"Combined"});
+    p.depth_kind = DepthKind::kPlanarZ;
+    p.normal_space = NormalSpace::kWorld;
+    p.direct_includes_albedo = false;
+    p.background_depth = 1e9;
+    p.motion.xy_to_previous = true;
+    p.motion.y_up = true;
+    p.motion.zw_current_minus_next = true;
+    p.reference =
+        "https://docs.blender.org/manual/en/latest/render/layers/passes.html; Blender source "
+        "DNA_scene_types.h / DNA_scene_enums.h (RE_PASSNAME_*)";
+    // Blender's EXR writer stamps every multilayer file with this attribute (seen in the sample
+    // data); cycles.<layer>.* render statistics accompany Cycles renders.
+    e.signature = {{Signature::Kind::kKey, "BlenderMultiChannel"},
+                   {Signature::Kind::kKeyPrefix, "cycles."}};
+    table.push_back(std::move(e));
+  }
+
+  {
+    // Built-in AOVs (Arnold User Guide, Output and AOVs > AOVs): Z depth, N "smooth normal
+    // (in world space)", P world position, RGBA beauty; motionvector is a VECTOR2 "screen
+    // space motion vector" (Arnold Developer Guide, AOVs) in pixels over the shutter interval:
+    // its direction and y orientation were not confirmed, taken as current -> next, y down.
+    // diffuse_direct is the LPE C<RD>L and diffuse_albedo C<RD>A (Light Path Expression AOVs):
+    // an LPE measures radiance, so diffuse_direct includes the albedo. Arnold samples emissive
+    // meshes as lights (mesh_light) only when set up so; emission is not gathered by default,
+    // as for the other renderers. Background Z: ai_constants.h defines AI_BIG 1e12 and
+    // AI_INFINITE 1e30; either is beyond the threshold. Whether Z is planar or radial was not
+    // confirmed from the documentation ("depth of the shading points as seen from the
+    // camera"); planar is assumed.
+    PresetEntry e;
+    LayoutPreset& p = e.preset;
+    p.name = "arnold";
+    p.renderer = "Autodesk Arnold";
+    set_candidates(&p, Role::kDepth, {"Z"});
+    set_candidates(&p, Role::kNormal, {"N"});
+    set_candidates(&p, Role::kAlbedo, {"diffuse_albedo", "albedo"});
+    set_candidates(&p, Role::kDirect, {"diffuse_direct"});
+    set_candidates(&p, Role::kEmission, {"emission"});
+    set_candidates(&p, Role::kMotion, {"motionvector"});
+    set_candidates(&p, Role::kPosition, {"P"});
+    set_candidates(&p, Role::kBeauty, {"RGBA", "R,G,B,A", "R,G,B"});
+    p.depth_kind = DepthKind::kPlanarZ;
+    p.normal_space = NormalSpace::kWorld;
+    p.direct_includes_albedo = true;
+    p.background_depth = 1e11;
+    p.motion.xy_to_previous = false;
+    p.reference =
+        "https://help.autodesk.com/view/ARNOL/ENU/"
+        "?guid=arnold_user_guide_ac_output_aovs_ac_aovs_html and "
+        "?guid=arnold_user_guide_ac_output_aovs_ac_expression_aovs_html; ai_constants.h";
+    // Arnold's EXR driver writes arnold/version, arnold/stats/... (read by several EXR tools to
+    // recognise Arnold renders).
+    e.signature = {{Signature::Kind::kKeyPrefix, "arnold/"}};
+    table.push_back(std::move(e));
+  }
+
+  {
+    // Render element names: 3ds Max (VRay*) then Maya defaults; the Maya names were not
+    // confirmed. The Z-depth element is remapped between Depth Black and Depth White (Chaos
+    // docs, "ZDepth"): render it with black 0, white 1, no clamp, no invert for raw distances,
+    // or name a raw depth with --channel. Whether that distance is planar was not confirmed.
+    // VRayRawLighting is direct diffuse lighting without the diffuse filter (VRayLighting has
+    // it); VRayDiffuseFilter is the albedo ("The pure diffuse surface color", V-Ray for Rhino
+    // render element list). VRayNormals are in camera space (assumed to match the library's,
+    // not confirmed); VRayVelocity in pixels towards the next frame (not confirmed).
+    PresetEntry e;
+    LayoutPreset& p = e.preset;
+    p.name = "vray";
+    p.renderer = "Chaos V-Ray";
+    set_candidates(&p, Role::kDepth, {"VRayZDepth", "zDepth", "ZDepth"});
+    set_candidates(&p, Role::kNormal, {"VRayNormals", "normals"});
+    set_candidates(&p, Role::kAlbedo, {"VRayDiffuseFilter", "diffuseFilter"});
+    set_candidates(&p, Role::kDirect, {"VRayRawLighting", "rawLight"});
+    set_candidates(&p, Role::kEmission, {"VRaySelfIllumination", "selfIllum"});
+    set_candidates(&p, Role::kMotion, {"VRayVelocity", "velocity"});
+    set_candidates(&p, Role::kBeauty, {"R,G,B,A", "R,G,B"});
+    p.depth_kind = DepthKind::kPlanarZ;
+    p.normal_space = NormalSpace::kCamera;
+    p.direct_includes_albedo = false;
+    p.background_depth = 1e9;
+    p.motion.xy_to_previous = false;
+    p.reference =
+        "https://docs.chaos.com/pages/viewpage.action?pageId=68944831 (ZDepth); "
+        "http://help.chaosgroup.com/vray/help/rhino/150R1/render_elements.htm";
+    // V-Ray stores its render info as vrayInfo/... attributes (read by compositing tools to
+    // recognise V-Ray renders; not in Chaos's own documentation as searched).
+    e.signature = {{Signature::Kind::kKeyPrefix, "vrayInfo/"}};
+    table.push_back(std::move(e));
+  }
+
+  {
+    // RenderMan display channels: z (camera-space depth) and Nn (normalised shading normal in
+    // RenderMan's "current" = camera space, x right, y up, +z forward as in the library) as
+    // written for the denoiser (rmanwiki, "Denoising"); directDiffuse, emissive and albedo are
+    // the predefined LPE AOVs (lpe:C<RD>[<L.>O], lpe:C[<L.>O]), so directDiffuse includes the
+    // albedo. The exact EXR channel names of vector AOVs (Nn.x or Nn.X) were not confirmed:
+    // both are accepted. Motion: the denoiser's backward vectors in raster pixels, towards the
+    // previous frame (y orientation not confirmed).
+    PresetEntry e;
+    LayoutPreset& p = e.preset;
+    p.name = "renderman";
+    p.renderer = "Pixar RenderMan";
+    set_candidates(&p, Role::kDepth, {"z", "Z"});
+    set_candidates(&p, Role::kNormal, {"Nn", "normal"});
+    set_candidates(&p, Role::kAlbedo, {"albedo"});
+    set_candidates(&p, Role::kDirect, {"directDiffuse"});
+    set_candidates(&p, Role::kEmission, {"emissive"});
+    set_candidates(&p, Role::kMotion, {"backward"});
+    set_candidates(&p, Role::kPosition, {"P"});
+    set_candidates(&p, Role::kBeauty, {"Ci", "R,G,B,A", "R,G,B"});
+    p.depth_kind = DepthKind::kPlanarZ;
+    p.normal_space = NormalSpace::kCamera;
+    p.direct_includes_albedo = true;
+    p.background_depth = 1e9;
+    p.motion.xy_to_previous = true;
+    p.reference =
+        "https://rmanwiki.pixar.com/display/REN24/Denoising; RenderMan docs, Light Path "
+        "Expressions (predefined LPE AOVs)";
+    // Not confirmed: RenderMan's header attributes were not found in its documentation; the
+    // Software attribute is taken as the mark.
+    e.signature = {{Signature::Kind::kSoftware, "RenderMan"},
+                   {Signature::Kind::kSoftware, "PRMan"}};
+    table.push_back(std::move(e));
+  }
+
+  {
+    // Houdini Karma render vars, written either as layers of one part or one EXR part per
+    // render var holding plain R G B (or one channel). Names from the Karma Standard Render
+    // Vars LOP: C (beauty), directdiffuse (LPE C<RD>L, so it includes the albedo), emission
+    // (CO); diffuse_albedo as in SideFX's LPE examples. The depth and normal var names
+    // (depth/Pz, N) follow the Mantra image planes; their spaces were not confirmed for
+    // Karma: Pz as planar camera z and N in camera space as in Mantra. ray:motionvector is a
+    // "raster-space velocity of hit surface" (Karma Ray Import VOP): towards the next frame,
+    // pixels; y orientation not confirmed.
+    PresetEntry e;
+    LayoutPreset& p = e.preset;
+    p.name = "karma";
+    p.renderer = "SideFX Houdini Karma";
+    set_candidates(&p, Role::kDepth, {"part:depth", "part:Pz", "depth", "Pz"});
+    set_candidates(&p, Role::kNormal, {"part:N", "N"});
+    set_candidates(&p, Role::kAlbedo,
+                   {"part:albedo", "part:diffuse_albedo", "albedo", "diffuse_albedo"});
+    set_candidates(
+        &p, Role::kDirect,
+        {"part:directdiffuse", "part:diffuse_direct", "directdiffuse", "diffuse_direct"});
+    set_candidates(&p, Role::kEmission, {"part:emission", "emission"});
+    set_candidates(&p, Role::kMotion, {"part:motionvector", "motionvector"});
+    set_candidates(&p, Role::kPosition, {"part:P", "P"});
+    set_candidates(&p, Role::kBeauty, {"part:C", "C"});
+    p.depth_kind = DepthKind::kPlanarZ;
+    p.normal_space = NormalSpace::kCamera;
+    p.direct_includes_albedo = true;
+    p.background_depth = 1e9;
+    p.motion.xy_to_previous = false;
+    p.reference =
+        "https://sidefx.com/docs/houdini/nodes/lop/karmastandardrendervars.html; "
+        "https://www.sidefx.com/docs/houdini/nodes/vop/kma_rayimport.html";
+    // Not confirmed by SideFX's documentation: Karma EXRs carry a Software attribute such as
+    // "Karma (xpu) 20.5.684" (seen in third-party EXR tools).
+    e.signature = {{Signature::Kind::kSoftware, "Karma"}, {Signature::Kind::kKeyPrefix, "karma"}};
+    table.push_back(std::move(e));
+  }
+
+  {
+    // Redshift integrated AOVs (Redshift docs, "Integrated AOVs"): "Diffuse Lighting ...
+    // multiplied by the material's diffuse color ... Diffuse Lighting Raw ... returns the
+    // non-multiplied diffuse lighting", so the raw AOV (direct only: GI is its own AOV) with
+    // DiffuseFilter as albedo. EXR layer names DiffuseFilter, DiffuseLightingRaw, Emission as
+    // used by compositing scripts; Z, N (world space by default, not confirmed), P and
+    // MotionVectors (pixels, current -> next: not confirmed, Redshift can also normalise them)
+    // are the default AOV names.
+    PresetEntry e;
+    LayoutPreset& p = e.preset;
+    p.name = "redshift";
+    p.renderer = "Maxon Redshift";
+    set_candidates(&p, Role::kDepth, {"Z"});
+    set_candidates(&p, Role::kNormal, {"N"});
+    set_candidates(&p, Role::kAlbedo, {"DiffuseFilter"});
+    set_candidates(&p, Role::kDirect, {"DiffuseLightingRaw"});
+    set_candidates(&p, Role::kEmission, {"Emission"});
+    set_candidates(&p, Role::kMotion, {"MotionVectors"});
+    set_candidates(&p, Role::kPosition, {"P"});
+    set_candidates(&p, Role::kBeauty, {"R,G,B,A", "R,G,B"});
+    p.depth_kind = DepthKind::kPlanarZ;
+    p.normal_space = NormalSpace::kWorld;
+    p.direct_includes_albedo = false;
+    p.background_depth = 1e9;
+    p.motion.xy_to_previous = false;
+    p.reference = "https://docs.redshift3d.com/display/RSDOCS/Integrated+AOVs";
+    // Not confirmed by Maxon's documentation: a redshift/ attribute prefix, as EXR tools look
+    // for it.
+    e.signature = {{Signature::Kind::kKeyPrefix, "redshift/"}};
+    table.push_back(std::move(e));
+  }
+
+  {
+    // Movie Render Queue multilayer EXR (Unreal docs, "Render Passes"): layers are
+    // FinalImage<post-process material>: FinalImage is the beauty,
+    // FinalImageMovieRenderQueue_WorldDepth holds "the depth written in world units stored in
+    // the red channel" (centimetres: the scene's units; camera translations are in the same
+    // units), FinalImageMovieRenderQueue_MotionVectors is "stored in the 0,1 coordinate space
+    // for X and Y, where 0.5, 0.5 is no motion", normalised to the screen. Their direction and
+    // y orientation were not confirmed (taken as current -> next, y down). Normals and base
+    // colour need user-made post-process materials (named WorldNormal and BaseColor here by
+    // common practice, not by Epic); the deferred renderer has no direct-diffuse pass, so
+    // direct needs --channel. Background depth is the far scene depth, assumed beyond 1e9 cm.
+    PresetEntry e;
+    LayoutPreset& p = e.preset;
+    p.name = "unreal";
+    p.renderer = "Unreal Engine Movie Render Queue";
+    set_candidates(&p, Role::kDepth,
+                   {"FinalImageMovieRenderQueue_WorldDepth", "MovieRenderQueue_WorldDepth",
+                    "FinalImageSceneDepth", "SceneDepth"});
+    set_candidates(&p, Role::kNormal, {"FinalImageWorldNormal", "WorldNormal"});
+    set_candidates(&p, Role::kAlbedo, {"FinalImageBaseColor", "BaseColor"});
+    set_candidates(&p, Role::kMotion,
+                   {"FinalImageMovieRenderQueue_MotionVectors", "MovieRenderQueue_MotionVectors"});
+    set_candidates(&p, Role::kBeauty, {"FinalImage", "R,G,B,A", "R,G,B"});
+    p.depth_kind = DepthKind::kPlanarZ;
+    p.normal_space = NormalSpace::kWorld;
+    p.direct_includes_albedo = false;
+    p.background_depth = 1e9;
+    p.motion.offset = -0.5;
+    p.motion.in_ndc = true;
+    p.motion.xy_to_previous = false;
+    p.reference =
+        "https://dev.epicgames.com/documentation/en-us/unreal-engine/"
+        "cinematic-render-passes-in-unreal-engine";
+    // The EXR carries unreal/camera/FinalImage/focalLength and friends (read by Epic's own
+    // Nuke example on that page).
+    e.signature = {{Signature::Kind::kKeyPrefix, "unreal/"}};
+    table.push_back(std::move(e));
+  }
+
+  {
+    // Nuke ScanlineRender: depth.Z holds 1/Z ("render world space distance with 1/Z",
+    // ScanlineRender2 reference; ScanlineRender writes depth.Z as 1/distance as well: whether
+    // that distance is planar was not confirmed, planar assumed). N and P layers from its
+    // output vectors (world space, not confirmed), backward.u/v the motion to the previous
+    // frame in pixels, y up as in Nuke's image coordinates. ScanlineRender has no albedo,
+    // direct or emission pass: name them with --channel.
+    PresetEntry e;
+    LayoutPreset& p = e.preset;
+    p.name = "nuke";
+    p.renderer = "Foundry Nuke ScanlineRender";
+    set_candidates(&p, Role::kDepth, {"depth"});
+    set_candidates(&p, Role::kNormal, {"N"});
+    set_candidates(&p, Role::kMotion, {"backward"});
+    set_candidates(&p, Role::kPosition, {"P"});
+    set_candidates(&p, Role::kBeauty, {"R,G,B,A", "R,G,B", "rgba"});
+    p.depth_kind = DepthKind::kInverseZ;
+    p.normal_space = NormalSpace::kWorld;
+    p.direct_includes_albedo = false;
+    p.background_depth = 1e9;
+    p.motion.xy_to_previous = true;
+    p.motion.y_up = true;
+    p.reference =
+        "https://learn.foundry.com/nuke/16.0v1/content/reference_guide/3dnew_nodes/"
+        "scanlinerender.html";
+    // Nuke's EXR writer adds nuke/version, nuke/node_hash and nuke/full_layer_names.
+    e.signature = {{Signature::Kind::kKeyPrefix, "nuke/"}};
+    table.push_back(std::move(e));
+  }
+
+  {
+    // Not a renderer: the roles come from --channel. World-space normals because that is what
+    // most renderers write (they need the file's worldToCamera); planar depth, direct without
+    // albedo, motion in pixels towards the previous frame with y down.
+    PresetEntry e;
+    LayoutPreset& p = e.preset;
+    p.name = "custom";
+    p.renderer = "any renderer, channels named with --channel";
+    set_candidates(&p, Role::kBeauty, {"R,G,B,A", "R,G,B"});
+    p.reference = "ssgi(1), --channel";
+    table.push_back(std::move(e));
+  }
+  return table;
+}
+
+const std::vector<PresetEntry>& preset_table() {
+  static const std::vector<PresetEntry> table = build_presets();
+  return table;
+}
+
+std::string known_preset_names() {
+  std::string names;
+  for (const PresetEntry& e : preset_table()) {
+    if (!names.empty()) names += ", ";
+    names += e.preset.name;
+  }
+  return names;
+}
+
+bool starts_with(const std::string& s, const std::string& prefix) {
+  return s.compare(0, prefix.size(), prefix) == 0;
+}
+
+std::string trim(const std::string& s) {
+  const std::size_t b = s.find_first_not_of(" \t");
+  if (b == std::string::npos) return {};
+  const std::size_t e = s.find_last_not_of(" \t");
+  return s.substr(b, e - b + 1);
+}
+
+std::vector<std::string> split_commas(const std::string& s) {
+  std::vector<std::string> parts;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = s.find(',', start);
+    parts.push_back(trim(s.substr(start, comma - start)));
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return parts;
+}
+
+// Where each channel name is, for lookups by full name.
+class ChannelIndex {
+ public:
+  explicit ChannelIndex(const FileChannels& file) : file_(file) {
+    per_subimage_.resize(file.channels.size());
+    for (std::size_t s = 0; s < file.channels.size(); ++s)
+      for (const std::string& name : file.channels[s]) per_subimage_[s].insert(name);
+  }
+
+  int subimage_count() const { return static_cast<int>(per_subimage_.size()); }
+  bool has(int subimage, const std::string& name) const {
+    return per_subimage_[subimage].count(name) > 0;
+  }
+  // The first subimage holding `name`, or -1.
+  int find(const std::string& name) const {
+    for (int s = 0; s < subimage_count(); ++s)
+      if (has(s, name)) return s;
+    return -1;
+  }
+  // The first subimage named `part`, or -1.
+  int find_part(const std::string& part) const {
+    for (std::size_t s = 0; s < file_.subimage_names.size() && s < per_subimage_.size(); ++s)
+      if (file_.subimage_names[s] == part) return static_cast<int>(s);
+    return -1;
+  }
+  const std::vector<std::string>& channels(int subimage) const { return file_.channels[subimage]; }
+
+ private:
+  const FileChannels& file_;
+  std::vector<std::set<std::string>> per_subimage_;
+};
+
+std::string layer_channel(const std::string& layer, const std::string& component) {
+  return layer.empty() ? component : layer + "." + component;
+}
+
+// Channels "<layer>.<c>" for the role's components, all in one subimage (`only_subimage`, or
+// the first that has them when negative).
+bool match_layer(const ChannelIndex& index, Role role, const std::string& layer, int only_subimage,
+                 std::vector<ChannelRef>* out) {
+  for (const std::vector<std::string>& set : component_sets(role)) {
+    for (int count : allowed_counts(role)) {
+      if (count > static_cast<int>(set.size())) continue;
+      const int first = only_subimage >= 0 ? only_subimage : 0;
+      const int last = only_subimage >= 0 ? only_subimage + 1 : index.subimage_count();
+      for (int s = first; s < last; ++s) {
+        bool all = true;
+        for (int c = 0; c < count && all; ++c) all = index.has(s, layer_channel(layer, set[c]));
+        if (!all) continue;
+        out->clear();
+        for (int c = 0; c < count; ++c) out->push_back({s, layer_channel(layer, set[c])});
+        return true;
+      }
+    }
+  }
+  return false;
+}
+
+// Prefixes P (ending in '.') under which channels "P<layer>.<c>" exist, in file order with
+// `preferred` first: Blender's view layers ("ViewLayer.", "Background.").
+std::vector<std::string> layer_prefixes(const ChannelIndex& index, const std::string& layer,
+                                        const std::string& preferred) {
+  std::vector<std::string> prefixes;
+  const std::string needle = "." + layer + ".";
+  for (int s = 0; s < index.subimage_count(); ++s) {
+    for (const std::string& name : index.channels(s)) {
+      if (name.size() <= needle.size()) continue;
+      const std::size_t at = name.rfind(needle);
+      if (at == std::string::npos || at + needle.size() >= name.size()) continue;
+      // Only the last dot-separated field may follow: it is the component.
+      if (name.find('.', at + needle.size()) != std::string::npos) continue;
+      const std::string prefix = name.substr(0, at + 1);
+      if (std::find(prefixes.begin(), prefixes.end(), prefix) == prefixes.end())
+        prefixes.push_back(prefix);
+    }
+  }
+  auto it = std::find(prefixes.begin(), prefixes.end(), preferred);
+  if (it != prefixes.end()) std::rotate(prefixes.begin(), it, it + 1);
+  return prefixes;
+}
+
+struct Match {
+  std::vector<ChannelRef> channels;
+  std::string prefix;  // the layer prefix a suffix match used, "" otherwise
+};
+
+bool match_part(const ChannelIndex& index, Role role, const std::string& part, Match* m) {
+  const int s = index.find_part(part);
+  if (s < 0) return false;
+  if (role_max_components(role) == 1 && index.channels(s).size() == 1) {
+    m->channels = {{s, index.channels(s)[0]}};
+    return true;
+  }
+  if (match_layer(index, role, "", s, &m->channels)) return true;
+  if (match_layer(index, role, part, s, &m->channels)) return true;
+  if (role == Role::kDepth && index.has(s, part)) {
+    m->channels = {{s, part}};
+    return true;
+  }
+  return false;
+}
+
+bool match_list(const ChannelIndex& index, Role role, const std::string& list, Match* m) {
+  const std::vector<std::string> names = split_commas(list);
+  const std::vector<int> counts = allowed_counts(role);
+  if (std::find(counts.begin(), counts.end(), static_cast<int>(names.size())) == counts.end())
+    return false;
+  m->channels.clear();
+  for (const std::string& name : names) {
+    const int s = index.find(name);
+    if (s < 0) return false;
+    m->channels.push_back({s, name});
+  }
+  return true;
+}
+
+// Resolves one candidate (see LayoutPreset::candidates) for `role`.
+bool match_candidate(const ChannelIndex& index, Role role, const std::string& candidate,
+                     const std::string& preferred_prefix, Match* m) {
+  m->prefix.clear();
+  if (starts_with(candidate, kPartPrefix))
+    return match_part(index, role, candidate.substr(std::string(kPartPrefix).size()), m);
+  if (candidate.find(',') != std::string::npos) return match_list(index, role, candidate, m);
+  if (match_layer(index, role, candidate, -1, &m->channels)) return true;
+  // A bare channel only by its exact name: "Z" must not match "ViewLayer.Depth.Z".
+  if (role == Role::kDepth) {
+    const int s = index.find(candidate);
+    if (s >= 0) {
+      m->channels = {{s, candidate}};
+      return true;
+    }
+  }
+  for (const std::string& prefix : layer_prefixes(index, candidate, preferred_prefix)) {
+    if (match_layer(index, role, prefix + candidate, -1, &m->channels)) {
+      m->prefix = prefix;
+      return true;
+    }
+  }
+  return false;
+}
+
+// A preset's candidates resolved against one file. Depth goes first so that the view layer it
+// is found in is preferred for the other roles.
+struct Resolution {
+  std::vector<ChannelRef> roles[kRoleCount];
+  std::string prefix;
+  int resolved = 0;
+};
+
+Resolution resolve_candidates(const LayoutPreset& preset, const ChannelIndex& index) {
+  Resolution r;
+  for (int i = 0; i < kRoleCount; ++i) {
+    const Role role = static_cast<Role>(i);
+    for (const std::string& candidate : preset.candidates[i]) {
+      Match m;
+      if (!match_candidate(index, role, candidate, r.prefix, &m)) continue;
+      r.roles[i] = std::move(m.channels);
+      if (role == Role::kDepth) r.prefix = m.prefix;
+      ++r.resolved;
+      break;
+    }
+  }
+  return r;
+}
+
+// The header evidence for `entry`, e.g. "header attribute arnold/version"; empty if none.
+std::string signature_evidence(const PresetEntry& entry, const FileChannels& file) {
+  for (const Signature& sig : entry.signature) {
+    for (const auto& [key, value] : file.attributes) {
+      switch (sig.kind) {
+        case Signature::Kind::kKey:
+          if (key == sig.text) return "header attribute " + key;
+          break;
+        case Signature::Kind::kKeyPrefix:
+          if (starts_with(key, sig.text)) return "header attribute " + key;
+          break;
+        case Signature::Kind::kSoftware:
+          if (key == "Software" && value.find(sig.text) != std::string::npos)
+            return "header attribute Software \"" + value + "\"";
+          break;
+      }
+    }
+  }
+  return {};
+}
+
+struct Override {
+  Role role;
+  std::string text;  // "ROLE=NAME" as given
+  std::string name;  // NAME
+};
+
+std::string role_list() {
+  std::string list;
+  for (const char* name : kRoleNames) {
+    if (!list.empty()) list += ", ";
+    list += name;
+  }
+  return list;
+}
+
+// Parses and checks the overrides' syntax, before any file is looked at.
+std::vector<Override> parse_overrides(const std::vector<std::string>& texts) {
+  std::vector<Override> overrides;
+  bool seen[kRoleCount] = {};
+  for (const std::string& text : texts) {
+    const std::size_t eq = text.find('=');
+    if (eq == std::string::npos || eq == 0 || eq + 1 == text.size())
+      throw_usage("--channel '" + text + "': expected ROLE=NAME, e.g. albedo=DiffCol");
+    Override o;
+    o.text = text;
+    o.name = text.substr(eq + 1);
+    const std::string role = trim(text.substr(0, eq));
+    if (!parse_role(role, &o.role))
+      throw_usage("--channel '" + text + "': unknown role '" + role + "' (roles: " + role_list() +
+                  ")");
+    const int r = static_cast<int>(o.role);
+    if (seen[r]) throw_usage("--channel: role " + role + " given twice");
+    seen[r] = true;
+    if (o.name.find(',') != std::string::npos) {
+      const std::vector<std::string> names = split_commas(o.name);
+      for (const std::string& n : names)
+        if (n.empty()) throw_usage("--channel '" + text + "': empty channel name in the list");
+      const std::vector<int> counts = allowed_counts(o.role);
+      if (std::find(counts.begin(), counts.end(), static_cast<int>(names.size())) == counts.end()) {
+        std::string wanted = std::to_string(counts.back());
+        if (counts.size() > 1)
+          wanted = std::to_string(counts.back()) + " or " + std::to_string(counts.front());
+        throw_usage("--channel '" + text + "': " + role + " takes " + wanted + " channels, got " +
+                    std::to_string(names.size()));
+      }
+    } else if (starts_with(o.name, kPartPrefix) &&
+               o.name.size() == std::string(kPartPrefix).size()) {
+      throw_usage("--channel '" + text + "': part: needs a part name");
+    }
+    overrides.push_back(std::move(o));
+  }
+  return overrides;
+}
+
+// What an override looked for, for the error message.
+std::string override_search(const Override& o) {
+  if (starts_with(o.name, kPartPrefix))
+    return "a part named " + o.name.substr(std::string(kPartPrefix).size());
+  if (o.name.find(',') != std::string::npos) return "channels " + o.name;
+  const std::vector<std::string>& first = component_sets(o.role).front();
+  std::string comps;
+  for (int c = 0; c < role_min_components(o.role); ++c) comps += (c ? "," : "") + first[c];
+  std::string what = o.name + ".{" + comps + "} or *." + o.name + ".{" + comps + "}";
+  if (o.role == Role::kDepth) what += " or a channel named " + o.name;
+  return what;
+}
+
+// "ViewLayer.Normal.{X,Y,Z}" for channels sharing a layer, else the names joined by commas;
+// channels of a named part are shown as "part/channel" or "part/{R,G,B}".
+std::string describe_channels(const std::vector<ChannelRef>& refs, const FileChannels& file) {
+  auto part_of = [&](const ChannelRef& c) -> std::string {
+    if (c.subimage < static_cast<int>(file.subimage_names.size()) && file.channels.size() > 1 &&
+        !file.subimage_names[c.subimage].empty())
+      return file.subimage_names[c.subimage] + "/";
+    return {};
+  };
+  std::string out = part_of(refs.front());
+  const std::size_t dot = refs.front().name.rfind('.');
+  bool common = refs.size() > 1 && dot != std::string::npos;
+  const std::string layer = common ? refs.front().name.substr(0, dot + 1) : std::string();
+  for (const ChannelRef& c : refs)
+    common =
+        common && starts_with(c.name, layer) && c.name.find('.', layer.size()) == std::string::npos;
+  if (common) {
+    out += layer + "{";
+    for (std::size_t i = 0; i < refs.size(); ++i)
+      out += (i ? "," : "") + refs[i].name.substr(layer.size());
+    return out + "}";
+  }
+  const bool in_part = !out.empty() && refs.size() > 1;
+  if (in_part) out += "{";
+  for (std::size_t i = 0; i < refs.size(); ++i) out += (i ? "," : "") + refs[i].name;
+  return in_part ? out + "}" : out;
+}
+
+std::string describe_roles(const Layout& layout, const FileChannels& file) {
+  std::string out;
+  for (int i = 0; i < kRoleCount; ++i) {
+    if (layout.roles[i].empty()) continue;
+    if (!out.empty()) out += ", ";
+    out += std::string(kRoleNames[i]) + " " + describe_channels(layout.roles[i], file);
+  }
+  return out.empty() ? "no channels" : "channels " + out;
+}
+
+void apply_overrides(const std::vector<Override>& overrides, const ChannelIndex& index,
+                     const std::string& preferred_prefix, const std::string& file_name,
+                     Layout* layout) {
+  for (const Override& o : overrides) {
+    Match m;
+    if (!match_candidate(index, o.role, o.name, preferred_prefix, &m))
+      throw_input(file_name, "--channel " + o.text + ": the file has no " + override_search(o));
+    layout->roles[static_cast<int>(o.role)] = std::move(m.channels);
+  }
+}
+
+std::string tried_depth_candidates() {
+  std::string tried;
+  for (const PresetEntry& e : preset_table()) {
+    for (const std::string& c : e.preset.candidates[static_cast<int>(Role::kDepth)]) {
+      if (!tried.empty()) tried += ", ";
+      tried += c;
+    }
+  }
+  return tried;
+}
+
+}  // namespace
+
+const char* role_name(Role role) { return kRoleNames[static_cast<int>(role)]; }
+
+bool parse_role(const std::string& name, Role* role) {
+  for (int i = 0; i < kRoleCount; ++i) {
+    if (name == kRoleNames[i]) {
+      *role = static_cast<Role>(i);
+      return true;
+    }
+  }
+  return false;
+}
+
+int role_min_components(Role role) {
+  switch (role) {
+    case Role::kDepth:
+      return 1;
+    case Role::kMotion:
+      return 2;
+    default:
+      return 3;
+  }
+}
+
+int role_max_components(Role role) {
+  switch (role) {
+    case Role::kDepth:
+      return 1;
+    case Role::kMotion:
+    case Role::kBeauty:
+      return 4;
+    default:
+      return 3;
+  }
+}
+
+const char* depth_kind_name(DepthKind kind) {
+  switch (kind) {
+    case DepthKind::kPlanarZ:
+      return "planar";
+    case DepthKind::kRadial:
+      return "radial";
+    case DepthKind::kInverseZ:
+      return "inverse";
+    case DepthKind::kNegativeZ:
+      return "negative";
+  }
+  return "planar";
+}
+
+bool parse_depth_kind(const std::string& name, DepthKind* kind) {
+  for (DepthKind k :
+       {DepthKind::kPlanarZ, DepthKind::kRadial, DepthKind::kInverseZ, DepthKind::kNegativeZ}) {
+    if (name == depth_kind_name(k)) {
+      *kind = k;
+      return true;
+    }
+  }
+  return false;
+}
+
+const char* normal_space_name(NormalSpace space) {
+  return space == NormalSpace::kWorld ? "world" : "camera";
+}
+
+const std::vector<LayoutPreset>& layout_presets() {
+  static const std::vector<LayoutPreset> presets = [] {
+    std::vector<LayoutPreset> v;
+    for (const PresetEntry& e : preset_table()) v.push_back(e.preset);
+    return v;
+  }();
+  return presets;
+}
+
+const LayoutPreset* find_layout_preset(const std::string& name) {
+  for (const LayoutPreset& p : layout_presets())
+    if (p.name == name) return &p;
+  return nullptr;
+}
+
+Layout resolve_layout(const FileChannels& file, const std::string& forced_preset,
+                      const std::vector<std::string>& channel_overrides,
+                      const std::string& file_name) {
+  const std::vector<PresetEntry>& table = preset_table();
+  const PresetEntry* forced = nullptr;
+  if (!forced_preset.empty()) {
+    for (const PresetEntry& e : table)
+      if (e.preset.name == forced_preset) forced = &e;
+    if (!forced)
+      throw_usage("unknown --layout '" + forced_preset + "' (known: " + known_preset_names() + ")");
+  }
+  const std::vector<Override> overrides = parse_overrides(channel_overrides);
+  const ChannelIndex index(file);
+  // Every override must name channels the file has, whichever preset is chosen.
+  for (const Override& o : overrides) {
+    Match m;
+    if (!match_candidate(index, o.role, o.name, "", &m))
+      throw_input(file_name, "--channel " + o.text + ": the file has no " + override_search(o));
+  }
+  const bool override_depth = std::any_of(overrides.begin(), overrides.end(),
+                                          [](const Override& o) { return o.role == Role::kDepth; });
+
+  const PresetEntry* chosen = forced;
+  Resolution chosen_resolution;
+  std::string evidence;
+  if (forced) {
+    chosen_resolution = resolve_candidates(forced->preset, index);
+    evidence = "--layout " + forced->preset.name;
+  } else {
+    // Rank: own depth, then a signature, then roles resolved; the table order breaks ties.
+    int best_score = -1;
+    for (const PresetEntry& e : table) {
+      if (e.preset.name == "custom") continue;
+      Resolution r = resolve_candidates(e.preset, index);
+      const bool own_depth = !r.roles[static_cast<int>(Role::kDepth)].empty();
+      const std::string sig = signature_evidence(e, file);
+      if (!own_depth && !(override_depth && !sig.empty())) continue;
+      const int score = (own_depth ? 1000 : 0) + (sig.empty() ? 0 : 100) + r.resolved;
+      if (score > best_score) {
+        best_score = score;
+        chosen = &e;
+        chosen_resolution = std::move(r);
+        evidence = sig;
+      }
+    }
+    if (!chosen && override_depth) {
+      for (const PresetEntry& e : table)
+        if (e.preset.name == "custom") chosen = &e;
+      chosen_resolution = resolve_candidates(chosen->preset, index);
+      evidence = "no preset matched";
+    }
+    if (!chosen)
+      throw_input(file_name,
+                  "no channel layout preset matches: no depth channel (looked for " +
+                      tried_depth_candidates() +
+                      "); name it with --channel depth=NAME or pick a preset with --layout " +
+                      known_preset_names());
+  }
+
+  Layout layout;
+  layout.preset = chosen->preset;
+  for (int i = 0; i < kRoleCount; ++i) layout.roles[i] = chosen_resolution.roles[i];
+  apply_overrides(overrides, index, chosen_resolution.prefix, file_name, &layout);
+  // A second motion vector that the conventions say not to read is not read at all.
+  std::vector<ChannelRef>& motion = layout.roles[static_cast<int>(Role::kMotion)];
+  if (motion.size() == 4 && !layout.preset.motion.zw_current_minus_next) motion.resize(2);
+  if (!layout.has(Role::kDepth)) {
+    const auto& tried = chosen->preset.candidates[static_cast<int>(Role::kDepth)];
+    std::string looked;
+    for (const std::string& c : tried) looked += (looked.empty() ? "" : ", ") + c;
+    throw_input(file_name, "--layout " + chosen->preset.name + ": no depth channel" +
+                               (looked.empty() ? std::string() : " (looked for " + looked + ")") +
+                               "; name it with --channel depth=NAME");
+  }
+
+  layout.detected_because = evidence;
+  if (!layout.detected_because.empty()) layout.detected_because += "; ";
+  layout.detected_because += describe_roles(layout, file);
+  for (const Override& o : overrides) layout.detected_because += "; --channel " + o.text;
+  return layout;
+}
+
+}  // namespace ssgi

@@ -12,7 +12,7 @@ enum class Role : int {
   kDepth,
   kNormal,
   kAlbedo,
-  kDirect,    // direct diffuse light (with or without albedo: see LayoutPreset)
+  kDirect,  // direct diffuse light (with or without albedo: see LayoutPreset)
   kEmission,
   kMotion,
   kPosition,
@@ -25,7 +25,7 @@ const char* role_name(Role role);
 // Parses a role name as above; returns false when unknown.
 bool parse_role(const std::string& name, Role* role);
 // Channels a role has, in order: depth Z; normal X Y Z; albedo, direct, emission R G B;
-// motion X Y [Z W]; position X Y Z; beauty R G B [A].
+// motion X Y [Z W] (two or four); position X Y Z; beauty R G B [A].
 int role_min_components(Role role);
 int role_max_components(Role role);
 
@@ -36,16 +36,21 @@ enum class DepthKind {
   kInverseZ,   // 1/z, zero at infinity (Nuke ScanlineRender)
   kNegativeZ,  // -z, negative in front (Fusion)
 };
+// "planar", "radial", "inverse", "negative".
 const char* depth_kind_name(DepthKind kind);
+// Parses a name as above; returns false when unknown.
 bool parse_depth_kind(const std::string& name, DepthKind* kind);
 
 enum class NormalSpace { kWorld, kCamera };
+// "world", "camera".
 const char* normal_space_name(NormalSpace space);
 
 // How motion vectors are stored, converted by the reader to the library's convention
 // (display pixels, +y down, offset from this pixel to the same surface point in the previous
 // and in the next frame).
 struct MotionConvention {
+  // Added to the stored X, Y before scaling: Unreal stores 0.5 for "no motion", so -0.5.
+  double offset = 0.0;
   // Multiplier that turns the stored X, Y into display pixels along x, y; NDC-unit vectors
   // set `in_ndc` and are scaled by the display window's width and height instead.
   double scale = 1.0;
@@ -56,6 +61,7 @@ struct MotionConvention {
   // True when the stored y grows upwards (image y is flipped).
   bool y_up = false;
   // True when Z, W hold the other direction, stored as current - next (Blender's Vector.ZW).
+  // When false, Z and W are not read even if the motion role has them.
   bool zw_current_minus_next = false;
 };
 
@@ -63,18 +69,27 @@ struct MotionConvention {
 struct LayoutPreset {
   std::string name;      // identifier used by --layout: "blender", "arnold", ...
   std::string renderer;  // human-readable renderer name
-  // Per role, candidate sources in order of preference. A candidate is either a layer name
-  // ("ViewLayer.DiffCol", "diffuse_albedo", "Z") whose channels are found inside it by
-  // component suffix, or a comma-separated list of full channel names. A candidate may start
-  // with "part:" to name a subimage (multi-part EXR) whose plain channels hold the role.
+  // Per role, candidate sources in order of preference; the first one the file has wins.
+  // The same syntax is used by --channel ROLE=NAME:
+  //  - a layer name "DiffCol": channels "DiffCol.<c>" for the role's components <c> (R G B,
+  //    r g b, X Y Z, ...; see role_min_components), else the same layer under any prefix
+  //    ("ViewLayer.DiffCol.R": a Blender view layer); a depth layer may also be a bare
+  //    channel of that exact name ("Z");
+  //  - a comma-separated list of full channel names "nx,ny,nz", in component order;
+  //  - "part:NAME": the subimage (EXR part) named NAME, whose plain channels (R G B, or its
+  //    only channel for depth) or "NAME.<c>" channels hold the role.
+  // Channels are always looked up by full name: OIIO may reorder channels inside a layer.
   std::vector<std::string> candidates[kRoleCount];
   DepthKind depth_kind = DepthKind::kPlanarZ;
+  // kCamera means the library's camera space (x right, y up, +z forward); world-space
+  // normals need the file's worldToCamera.
   NormalSpace normal_space = NormalSpace::kWorld;
   bool direct_includes_albedo = false;
   // True for renderers that do not sample emissive surfaces as lights, so emission must be
   // gathered by the march (see DESIGN.md, "Radiance gathered").
   bool gather_emission = false;
-  // Depth at or beyond this is background (besides inf and NaN).
+  // Planar depth, after conversion by depth_kind and in the file's own units, at or beyond
+  // which a pixel is background (besides inf, NaN and depth <= 0).
   double background_depth = 1e9;
   MotionConvention motion;
   // Where the conventions above are documented (a URL or a manual section).
@@ -89,33 +104,40 @@ struct ChannelRef {
 
 // What a file offers, as the layout resolver sees it.
 struct FileChannels {
-  std::vector<std::string> subimage_names;            // oiio:subimagename per subimage
-  std::vector<std::vector<std::string>> channels;     // channel names per subimage
-  std::map<std::string, std::string> attributes;      // subimage 0's header, as strings
+  std::vector<std::string> subimage_names;         // oiio:subimagename per subimage
+  std::vector<std::vector<std::string>> channels;  // channel names per subimage
+  std::map<std::string, std::string> attributes;   // subimage 0's header, as strings
 };
 
 // A preset resolved against one file: the channels each role reads from.
 struct Layout {
-  LayoutPreset preset;                   // conventions (the preset's, after overrides)
+  LayoutPreset preset;                        // conventions (the preset's, after overrides)
   std::vector<ChannelRef> roles[kRoleCount];  // empty: the file does not provide the role
-  std::string detected_because;          // why this preset was chosen, for `ssgi info`
+  std::string detected_because;               // why this preset was chosen, for `ssgi info`
 
   bool has(Role role) const { return !roles[static_cast<int>(role)].empty(); }
-  const std::vector<ChannelRef>& channels(Role role) const {
-    return roles[static_cast<int>(role)];
-  }
+  const std::vector<ChannelRef>& channels(Role role) const { return roles[static_cast<int>(role)]; }
 };
 
-// All built-in presets, in detection order.
+// All built-in presets, in detection order, followed by "custom" (generic conventions, no
+// candidates but a bare R G B [A] beauty: the roles come from --channel overrides).
 const std::vector<LayoutPreset>& layout_presets();
 // The preset named `name`, or nullptr.
 const LayoutPreset* find_layout_preset(const std::string& name);
 
-// Picks the preset for `file` (detected, or `forced_preset` when not empty), resolves each role
-// to channels, then applies `channel_overrides` ("ROLE=NAME": a layer name or a comma list of
-// full channel names, see LayoutPreset::candidates). Throws Error(kUsage) on an unknown preset
-// or role or a malformed override, Error(kInput) naming `file_name` when an override names
-// channels the file lacks or no preset matches and no overrides give a depth channel.
+// Picks the preset for `file` and resolves each role to channels, then applies
+// `channel_overrides` ("ROLE=NAME", NAME as in LayoutPreset::candidates).
+//
+// With `forced_preset` empty the preset is detected. A preset qualifies when the file gives it
+// a depth channel (its own candidates or an override) and either its own candidates find the
+// depth or the header carries its signature (BlenderMultiChannel, arnold/..., vrayInfo/...,
+// nuke/..., unreal/...). Among those, own depth beats signature only, then a signature wins,
+// then the most roles resolved, then the earlier preset. When none qualifies but the overrides
+// give a depth channel, "custom" is used.
+//
+// Throws Error(kUsage) on an unknown preset (listing the known ones), an unknown role or a
+// malformed or repeated override; Error(kInput) naming `file_name` when an override names
+// channels the file lacks, or when no depth channel results.
 Layout resolve_layout(const FileChannels& file, const std::string& forced_preset,
                       const std::vector<std::string>& channel_overrides,
                       const std::string& file_name);
