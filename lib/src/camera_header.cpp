@@ -1,0 +1,365 @@
+// Cameras from EXR header attributes (OpenEXR standard, Nuke, V-Ray, Arnold) and from JSON
+// sidecar files.
+#include "camera_header.h"
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "ssgi/error.h"
+
+namespace ssgi::detail {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+Mat4d diagonal(double x, double y, double z) {
+  Mat4d d;
+  d.m[0][0] = x;
+  d.m[1][1] = y;
+  d.m[2][2] = z;
+  return d;
+}
+
+Mat4d transposed(const Mat4d& a) {
+  Mat4d t;
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) t.m[i][j] = a.m[j][i];
+  return t;
+}
+
+// Exact-case lookup: OIIO keeps EXR attribute names as written, except for a few it renames to
+// its own (lower-case) conventions, and those renamed names mean something else (see below).
+const OIIO::ParamValue* find_exact(const OIIO::ImageSpec& spec, const std::string& name) {
+  return spec.find_attribute(name, OIIO::TypeDesc::UNKNOWN, /*casesensitive=*/true);
+}
+
+// `name`, or Nuke's "exr/<name>": Nuke prefixes the EXR attributes it read, and files written
+// from Nuke metadata can carry that prefix.
+const OIIO::ParamValue* find_attr(const OIIO::ImageSpec& spec, const std::string& name) {
+  if (const OIIO::ParamValue* p = find_exact(spec, name)) return p;
+  return find_exact(spec, "exr/" + name);
+}
+
+// All numbers of a numeric attribute (float or double, any aggregate) or of a string holding
+// numbers separated by commas or blanks, as a metadata pass-through may write them.
+std::vector<double> numbers_of(const OIIO::ParamValue& p) {
+  std::vector<double> out;
+  const OIIO::TypeDesc t = p.type();
+  const std::size_t n = t.basevalues() * static_cast<std::size_t>(p.nvalues());
+  if (t.basetype == OIIO::TypeDesc::FLOAT) {
+    const float* v = static_cast<const float*>(p.data());
+    out.assign(v, v + n);
+  } else if (t.basetype == OIIO::TypeDesc::DOUBLE) {
+    const double* v = static_cast<const double*>(p.data());
+    out.assign(v, v + n);
+  } else if (t.basetype == OIIO::TypeDesc::INT) {
+    const int* v = static_cast<const int*>(p.data());
+    out.assign(v, v + n);
+  } else if (t.basetype == OIIO::TypeDesc::UINT) {
+    const unsigned* v = static_cast<const unsigned*>(p.data());
+    out.assign(v, v + n);
+  } else if (t == OIIO::TypeDesc::STRING) {
+    std::string s = p.get_string(0);
+    for (char& c : s)
+      if (c == ',' || c == '[' || c == ']' || c == '(' || c == ')') c = ' ';
+    std::istringstream is(s);
+    double v;
+    while (is >> v) out.push_back(v);
+    if (!is.eof()) out.clear();
+  }
+  return out;
+}
+
+std::optional<Mat4d> matrix_attr(const OIIO::ImageSpec& spec, const std::string& name,
+                                 const std::string& file) {
+  const OIIO::ParamValue* p = find_attr(spec, name);
+  if (!p) return std::nullopt;
+  const std::vector<double> v = numbers_of(*p);
+  if (v.size() != 16)
+    throw_input(file, "header attribute " + std::string(p->name()) + " is not a 4x4 matrix");
+  Mat4d m;
+  for (int i = 0; i < 16; ++i) m.m[i / 4][i % 4] = v[i];
+  return m;
+}
+
+std::optional<double> number_attr(const OIIO::ImageSpec& spec, const std::string& name) {
+  const OIIO::ParamValue* p = find_attr(spec, name);
+  if (!p) return std::nullopt;
+  const std::vector<double> v = numbers_of(*p);
+  if (v.size() != 1 || !std::isfinite(v[0])) return std::nullopt;
+  return v[0];
+}
+
+double pixel_aspect_of(const OIIO::ImageSpec& spec) {
+  // OIIO renames pixelAspectRatio to PixelAspectRatio; accept either.
+  std::optional<double> pa = number_attr(spec, "PixelAspectRatio");
+  if (!pa) pa = number_attr(spec, "pixelAspectRatio");
+  return pa && *pa > 0 ? *pa : 1.0;
+}
+
+// OpenEXR's screen window (Technical Introduction, "Projection, camera coordinate system and
+// screen window"): centre C and width W on the z = 1 plane; its height follows from the display
+// window and the pixel aspect ratio, and it covers the display window. Screen y points up, NDC
+// y down, so the window maps to NDC [0,1]^2 as RenderMan maps its screen window to NDC.
+Mat4d screen_to_ndc(const OIIO::ImageSpec& spec, const Box2i& display, const std::string& file) {
+  double cx = 0, cy = 0, width = 1;
+  if (const OIIO::ParamValue* p = find_attr(spec, "screenWindowCenter")) {
+    const std::vector<double> v = numbers_of(*p);
+    if (v.size() != 2) throw_input(file, "screenWindowCenter is not two numbers");
+    cx = v[0];
+    cy = v[1];
+  }
+  if (std::optional<double> w = number_attr(spec, "screenWindowWidth")) width = *w;
+  if (!(width > 0 && std::isfinite(width) && std::isfinite(cx) && std::isfinite(cy)))
+    throw_input(file, "screenWindowCenter/screenWindowWidth do not define a screen window");
+  const double height =
+      width * display.height() / (static_cast<double>(display.width()) * pixel_aspect_of(spec));
+  Mat4d s;
+  s.m[0][0] = 1 / width;
+  s.m[1][1] = -1 / height;
+  s.m[3][0] = 0.5 - cx / width;
+  s.m[3][1] = 0.5 + cy / height;
+  return s;
+}
+
+Camera from_matrices(const Mat4d& world_to_camera, const Mat4d& world_to_ndc, const Box2i& display,
+                     const std::string& file, const std::string& source) {
+  Camera c = camera_from_matrices(world_to_camera, world_to_ndc, display, file);
+  c.source = "header " + source;
+  return c;
+}
+
+// A camera from a horizontal field of view and, when known, a world-to-camera transform whose
+// camera frame is mapped to ours by `local_to_ours` (a signed permutation).
+Camera from_fov(double hfov_deg, const std::optional<Mat4d>& world_to_local,
+                const Mat4d& local_to_ours, const OIIO::ImageSpec& spec, const Box2i& display,
+                const std::string& file, const std::string& source) {
+  if (!(hfov_deg > 0 && hfov_deg < 180))
+    throw_input(file, source + ": field of view " + std::to_string(hfov_deg) +
+                          " degrees is outside (0, 180)");
+  Camera c = camera_from_fov(hfov_deg, display, pixel_aspect_of(spec));
+  if (world_to_local) {
+    c.world_to_camera = *world_to_local * local_to_ours;
+    try {
+      c.world_to_camera.inverse();  // the normal transform needs it
+    } catch (const Error& e) {
+      throw_input(file, source + ": " + e.what());
+    }
+    c.has_world_transform = true;
+  }
+  c.source = "header " + source;
+  return c;
+}
+
+// V-Ray writes cameraTransform (camera-to-world), cameraFov (horizontal, degrees: 73.72 for a
+// 24 mm lens on a 36 mm aperture in the header dumps ProEXR users post), cameraFocalLength and
+// cameraAperture (mm), and cameraProjection (0 in every perspective render seen). OIIO renames
+// cameraTransform to "worldtocamera" (exrinput.cpp, exr_tag_to_oiio_std) although it is
+// camera-to-world. Its local frame is inferred, not documented: the V-Ray App SDK gives
+// +Y up, -Z forward for an identity transform, which 3ds Max headers match (world Z up); in
+// V-Ray for Maya headers the matrix's -Z is world up (Y) and -Y is forward, which is also what
+// published Nuke "camera from V-Ray EXR" scripts undo. Without a sidecar, that is our best
+// reading; the source string names it so a wrong camera can be traced.
+std::optional<Camera> vray_camera(const OIIO::ImageSpec& spec, const Box2i& display,
+                                  const std::string& file) {
+  std::optional<double> fov = number_attr(spec, "cameraFov");
+  if (!fov) {
+    // Focal length over aperture gives the film-back fov, which differs from the rendered fov
+    // when the host fits the film gate to another aspect; only a fallback.
+    const std::optional<double> focal = number_attr(spec, "cameraFocalLength");
+    const std::optional<double> aperture = number_attr(spec, "cameraAperture");
+    if (focal && aperture && *focal > 0 && *aperture > 0)
+      fov = 2 * std::atan(0.5 * *aperture / *focal) * 180 / kPi;
+  }
+  if (!fov) return std::nullopt;
+  if (std::optional<double> projection = number_attr(spec, "cameraProjection");
+      projection && *projection != 0)
+    throw_input(file, "V-Ray cameraProjection " + std::to_string(static_cast<int>(*projection)) +
+                          " is not a perspective camera; give --fov or --camera");
+  std::optional<Mat4d> transform = matrix_attr(spec, "cameraTransform", file);
+  if (!transform) transform = matrix_attr(spec, "worldtocamera", file);
+  std::optional<Mat4d> world_to_local;
+  if (transform) {
+    // Written both ways in the wild: translation in the last row (Imath) or last column.
+    Mat4d t = *transform;
+    const double last_col = std::abs(t.m[0][3]) + std::abs(t.m[1][3]) + std::abs(t.m[2][3]);
+    const double last_row = std::abs(t.m[3][0]) + std::abs(t.m[3][1]) + std::abs(t.m[3][2]);
+    if (last_col > 0 && last_row == 0) t = transposed(t);
+    try {
+      world_to_local = t.inverse();
+    } catch (const Error& e) {
+      throw_input(file, std::string("V-Ray cameraTransform: ") + e.what());
+    }
+  }
+  bool maya = false;
+  if (const OIIO::ParamValue* p = find_attr(spec, "vrayInfo/vrayversion"))
+    maya = p->get_string(0).find("Maya") != std::string::npos;
+  Mat4d local_to_ours = diagonal(1, 1, -1);  // +Y up, -Z forward
+  if (maya) {
+    local_to_ours = Mat4d();
+    local_to_ours.m[1][1] = 0;
+    local_to_ours.m[2][2] = 0;
+    local_to_ours.m[1][2] = -1;  // local -Y is our +z (forward)
+    local_to_ours.m[2][1] = -1;  // local -Z is our +y (up)
+  }
+  return from_fov(*fov, world_to_local, local_to_ours, spec, display, file,
+                  transform ? "V-Ray cameraTransform/cameraFov" : "V-Ray cameraFov");
+}
+
+// Arnold EXRs rendered from Maya (MtoA) carry CameraFov, CameraFocalLength and
+// CameraFilmApertureHorizontal/Vertical beside worldToCamera, but no projection matrix. The
+// names are documented only by the Nuke tools that rebuild cameras from them (e.g. MrLixm's
+// metadataToCamera), not by Autodesk: those read focal length and aperture in one unit and
+// negate worldToCamera's z, Arnold cameras looking down -Z. We do the same.
+std::optional<Camera> arnold_camera(const OIIO::ImageSpec& spec, const Box2i& display,
+                                    const std::string& file) {
+  std::optional<double> fov = number_attr(spec, "CameraFov");
+  if (!fov) {
+    const std::optional<double> focal = number_attr(spec, "CameraFocalLength");
+    const std::optional<double> aperture = number_attr(spec, "CameraFilmApertureHorizontal");
+    if (focal && aperture && *focal > 0 && *aperture > 0)
+      fov = 2 * std::atan(0.5 * *aperture / *focal) * 180 / kPi;
+  }
+  if (!fov) return std::nullopt;
+  std::optional<Mat4d> world_to_camera = matrix_attr(spec, "worldToCamera", file);
+  // OIIO before 2.2 renamed worldToCamera to "worldtocamera".
+  if (!world_to_camera) world_to_camera = matrix_attr(spec, "worldtocamera", file);
+  return from_fov(*fov, world_to_camera, diagonal(1, 1, -1), spec, display, file,
+                  world_to_camera ? "Arnold worldToCamera/CameraFov" : "Arnold CameraFov");
+}
+
+using nlohmann::json;
+
+Mat4d json_matrix(const json& j, const char* key, const std::string& file, int frame) {
+  const std::string where = "frame " + std::to_string(frame) + ": \"" + key + "\"";
+  std::vector<double> v;
+  if (!j.is_array()) throw_input(file, where + " is not an array");
+  for (const json& e : j) {
+    if (e.is_array()) {
+      for (const json& x : e) {
+        if (!x.is_number()) throw_input(file, where + " has a non-number");
+        v.push_back(x.get<double>());
+      }
+    } else if (e.is_number()) {
+      v.push_back(e.get<double>());
+    } else {
+      throw_input(file, where + " has a non-number");
+    }
+  }
+  if (v.size() != 16) throw_input(file, where + " does not hold 16 numbers");
+  Mat4d m;
+  for (int i = 0; i < 16; ++i) m.m[i / 4][i % 4] = v[i];
+  return m;
+}
+
+// The camera an object with the keys of the format (see camera_header.h) describes, or
+// nullopt when it has none of them.
+std::optional<Camera> json_camera(const json& j, const Box2i& display, const std::string& file,
+                                  int frame) {
+  const std::string source = "sidecar " + file;
+  const std::string where = "frame " + std::to_string(frame);
+  const bool has_w2c = j.contains("worldToCamera"), has_ndc = j.contains("worldToNDC");
+  if (has_w2c && has_ndc) {
+    const Mat4d w2c = json_matrix(j["worldToCamera"], "worldToCamera", file, frame);
+    const Mat4d ndc = json_matrix(j["worldToNDC"], "worldToNDC", file, frame);
+    Camera c = camera_from_matrices(w2c, ndc, display, file);
+    c.source = source;
+    return c;
+  }
+  if (!j.contains("hfov_deg")) {
+    if (has_w2c || has_ndc)
+      throw_input(file, where + ": worldToCamera and worldToNDC come together (or give hfov_deg)");
+    return std::nullopt;
+  }
+  const json& fov = j["hfov_deg"];
+  if (!fov.is_number() || !(fov.get<double>() > 0 && fov.get<double>() < 180))
+    throw_input(file, where + ": \"hfov_deg\" is not a number in (0, 180)");
+  double pixel_aspect = 1;
+  if (j.contains("pixel_aspect")) {
+    const json& pa = j["pixel_aspect"];
+    if (!pa.is_number() || !(pa.get<double>() > 0))
+      throw_input(file, where + ": \"pixel_aspect\" is not a positive number");
+    pixel_aspect = pa.get<double>();
+  }
+  Camera c = camera_from_fov(fov.get<double>(), display, pixel_aspect);
+  if (has_w2c) {
+    c.world_to_camera = json_matrix(j["worldToCamera"], "worldToCamera", file, frame);
+    try {
+      c.world_to_camera.inverse();
+    } catch (const Error& e) {
+      throw_input(file, where + ": worldToCamera: " + e.what());
+    }
+    c.has_world_transform = true;
+  }
+  c.source = source;
+  return c;
+}
+
+}  // namespace
+
+std::optional<Camera> camera_from_header(const OIIO::ImageSpec& spec, const Box2i& display_window,
+                                         const std::string& file) {
+  // OpenEXR standard attributes (Standard Attributes, "worldToCamera", "worldToNDC"); the
+  // "exr/" prefix is Nuke's. OIIO before 2.2 read them as "worldtocamera" and "worldtoscreen"
+  // (OIIO pull request #2609 stopped renaming worldToNDC), so that pair means the same.
+  if (std::optional<Mat4d> w2c = matrix_attr(spec, "worldToCamera", file)) {
+    if (std::optional<Mat4d> ndc = matrix_attr(spec, "worldToNDC", file))
+      return from_matrices(*w2c, *ndc, display_window, file, "worldToCamera/worldToNDC");
+    // RenderMan-style screen space: the OpenEXR screen window maps it onto the display window.
+    if (std::optional<Mat4d> screen = matrix_attr(spec, "worldToScreen", file))
+      return from_matrices(*w2c, *screen * screen_to_ndc(spec, display_window, file),
+                           display_window, file, "worldToCamera/worldToScreen");
+  }
+  if (find_exact(spec, "worldtocamera") && find_exact(spec, "worldtoscreen")) {
+    return from_matrices(*matrix_attr(spec, "worldtocamera", file),
+                         *matrix_attr(spec, "worldtoscreen", file), display_window, file,
+                         "worldToCamera/worldToNDC");
+  }
+  if (std::optional<Camera> c = vray_camera(spec, display_window, file)) return c;
+  if (std::optional<Camera> c = arnold_camera(spec, display_window, file)) return c;
+  return std::nullopt;
+}
+
+Camera camera_from_sidecar(const std::string& json_path, int frame, const Box2i& display_window) {
+  std::ifstream in(json_path, std::ios::binary);
+  if (!in) throw_io(json_path, "cannot open camera file");
+  json root;
+  try {
+    root = json::parse(in);
+  } catch (const json::parse_error& e) {
+    if (in.bad()) throw_io(json_path, "cannot read camera file");
+    throw_input(json_path, std::string("not valid JSON: ") + e.what());
+  }
+  if (!root.is_object()) throw_input(json_path, "not a JSON object");
+  try {
+    if (root.contains("frames")) {
+      const json& frames = root["frames"];
+      if (!frames.is_array()) throw_input(json_path, "\"frames\" is not an array");
+      for (const json& f : frames) {
+        if (!f.is_object() || !f.contains("frame") || !f["frame"].is_number_integer())
+          throw_input(json_path, "every entry of \"frames\" needs an integer \"frame\"");
+        if (f["frame"].get<long long>() != frame) continue;
+        if (std::optional<Camera> c = json_camera(f, display_window, json_path, frame)) return *c;
+        throw_input(json_path, "frame " + std::to_string(frame) +
+                                   " has neither worldToCamera/worldToNDC nor hfov_deg");
+      }
+    }
+    if (std::optional<Camera> c = json_camera(root, display_window, json_path, frame)) return *c;
+  } catch (const json::exception& e) {
+    throw_input(json_path, std::string("malformed camera file: ") + e.what());
+  } catch (const Error& e) {
+    // camera_from_fov reports a bad value as a usage error; in a file it is bad input.
+    if (e.kind() == ErrorKind::kUsage || e.file().empty())
+      throw_input(json_path, "frame " + std::to_string(frame) + ": " + e.what());
+    throw;
+  }
+  throw_input(json_path, "no camera for frame " + std::to_string(frame));
+}
+
+}  // namespace ssgi::detail

@@ -7,17 +7,20 @@
 
 namespace ssgi {
 
+// A point or direction in double precision.
 struct Vec3d {
   double x = 0, y = 0, z = 0;
 };
 
 // A 4x4 matrix in Imath's row-vector convention, as OpenEXR headers store it:
-// p' = p * M, translation in m[3][0..2].
+// p' = p * M, translation in m[3][0..2]. Identity by default.
 struct Mat4d {
   double m[4][4] = {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}};
 
+  // Row-vector composition: p * (A * B) = (p * A) * B, i.e. A first, then B.
   Mat4d operator*(const Mat4d& o) const;
-  // Throws Error(kInput) when singular.
+  // Throws Error(kInput) when singular: |det| below 1e-12 times the product of the row
+  // lengths (a scale-free test), or any entry not finite.
   Mat4d inverse() const;
   // Homogeneous point transform with the divide by w.
   Vec3d transform_point(const Vec3d& p) const;
@@ -30,7 +33,8 @@ struct Mat4d {
 // Pixel (i, j) has its centre at (i + 0.5, j + 0.5), i.e. NDC ((i+0.5)/W, (j+0.5)/H).
 struct Camera {
   // px = cx + fx * x / z,  py = cy - fy * y / z  (display-window pixel units, origin at the
-  // display window's top-left corner).
+  // display window's top-left corner, so the window spans [0, W] x [0, H]). fx, fy > 0; an
+  // off-centre (shifted) camera has (cx, cy) away from (W/2, H/2).
   double fx = 1, fy = 1, cx = 0, cy = 0;
   // Whether world_to_camera is known (header matrices or sidecar); a --fov camera has none,
   // and then world-space inputs (normals, env maps) are taken as camera-space.
@@ -41,7 +45,8 @@ struct Camera {
 
   // Horizontal field of view over `display_width` pixels, in degrees.
   double hfov_deg(int display_width) const;
-  // Camera-space point to continuous display-window pixel coordinates.
+  // Camera-space point to continuous display-window pixel coordinates. Meaningful for
+  // p.z > 0 only: the caller tests z (behind the camera the result is mirrored or infinite).
   void project(const Vec3d& p, double* px, double* py) const;
   // Continuous display-window pixel coordinates and planar depth z to a camera-space point.
   Vec3d unproject(double px, double py, double z) const;
@@ -49,13 +54,18 @@ struct Camera {
   Vec3d view_dir(double px, double py) const;
 };
 
-// A camera with the given horizontal field of view over the display window, centred, with
-// square pixels scaled by `pixel_aspect` (OpenEXR pixelAspectRatio = pixel width / height).
+// A centred camera with the given horizontal field of view over the display window and
+// `pixel_aspect` = OpenEXR pixelAspectRatio (pixel width / height): fy = fx * pixel_aspect,
+// since a wider pixel covers more of the image plane across than down. No world transform;
+// source "--fov". Throws Error(kUsage) unless 0 < hfov_deg < 180 and pixel_aspect > 0.
 Camera camera_from_fov(double hfov_deg, const Box2i& display_window, double pixel_aspect = 1.0);
 
 // A camera from OpenEXR's standard worldToCamera and worldToNDC attributes (NDC (0,0) top-left,
-// (1,1) bottom-right of the display window, divide by w). Throws Error(kInput) on a singular or
-// non-perspective matrix pair; `file` names the source in that error.
+// (1,1) bottom-right of the display window, divide by w), off-centre shifts included. The
+// file's camera axes may point either way: world_to_camera is flipped to x right, y up,
+// +z forward. Throws Error(kInput) naming `file` on a singular or non-finite matrix, or when
+// inverse(worldToCamera) * worldToNDC is not a pinhole projection at the camera origin
+// (orthographic, skewed, tilted) or looks like a -1..1 screen matrix.
 Camera camera_from_matrices(const Mat4d& world_to_camera, const Mat4d& world_to_ndc,
                             const Box2i& display_window, const std::string& file);
 
@@ -64,6 +74,7 @@ Camera camera_from_matrices(const Mat4d& world_to_camera, const Mat4d& world_to_
 namespace ssgi {
 
 // Where the user told the camera to come from; when both are empty the EXR header decides.
+// The sidecar wins over --fov, which wins over the header.
 struct CameraOptions {
   double hfov_deg = 0;  // --fov: > 0 gives a static camera with this horizontal field of view
   std::string sidecar;  // --camera FILE.json: per-frame cameras (format in man/ssgi.1)
