@@ -1,0 +1,361 @@
+// Comparing two image files: channels selected by name across all subimages, read with OIIO,
+// compared with compare_images(), and the difference image written atomically.
+#include <OpenImageIO/imageio.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <map>
+#include <memory>
+
+#include "ssgi/compare.h"
+#include "ssgi/error.h"
+
+namespace ssgi {
+namespace {
+
+namespace fs = std::filesystem;
+
+// OIIO's messages can span lines; ours are one line.
+std::string one_line(std::string s) {
+  std::replace(s.begin(), s.end(), '\n', ' ');
+  while (!s.empty() && s.back() == ' ') s.pop_back();
+  return s;
+}
+
+std::string join(const std::vector<std::string>& items, const char* separator) {
+  std::string out;
+  for (const std::string& item : items) out += (out.empty() ? "" : separator) + item;
+  return out;
+}
+
+// The text before a channel name's last '.', empty for a root channel such as `R`.
+std::string layer_of(const std::string& channel) {
+  const auto dot = channel.rfind('.');
+  return dot == std::string::npos ? std::string() : channel.substr(0, dot);
+}
+
+std::string suffix_of(const std::string& channel) {
+  const auto dot = channel.rfind('.');
+  return dot == std::string::npos ? channel : channel.substr(dot + 1);
+}
+
+// Every channel of a file under the name a user knows it by, mapped to where it is. A channel
+// of a named part that has no layer of its own (Karma's per-AOV parts hold plain R, G, B) is
+// `<part>.<channel>`, as ssgi's writer names it; the first of two equal names wins.
+struct NamedChannels {
+  std::vector<std::string> names;  // file order
+  std::map<std::string, ChannelRef> where;
+};
+
+NamedChannels name_channels(const FileChannels& file) {
+  NamedChannels out;
+  const bool multipart = file.channels.size() > 1;
+  for (std::size_t s = 0; s < file.channels.size(); ++s) {
+    const std::string& part = s < file.subimage_names.size() ? file.subimage_names[s] : "";
+    for (const std::string& raw : file.channels[s]) {
+      const bool prefix = multipart && !part.empty() && raw.find('.') == std::string::npos;
+      const std::string name = prefix ? part + "." + raw : raw;
+      if (out.where.emplace(name, ChannelRef{static_cast<int>(s), raw}).second)
+        out.names.push_back(name);
+    }
+  }
+  return out;
+}
+
+bool has_rgb(const NamedChannels& file, const std::string& layer) {
+  const std::string prefix = layer.empty() ? "" : layer + ".";
+  return file.where.count(prefix + "R") && file.where.count(prefix + "G") &&
+         file.where.count(prefix + "B");
+}
+
+// Layers that have R, G and B, in file order.
+std::vector<std::string> rgb_layers(const NamedChannels& file) {
+  std::vector<std::string> layers;
+  for (const std::string& name : file.names) {
+    const std::string layer = layer_of(name);
+    if (std::find(layers.begin(), layers.end(), layer) == layers.end() && has_rgb(file, layer))
+      layers.push_back(layer);
+  }
+  return layers;
+}
+
+// A name on the command line: a channel, else a layer with R, G, B.
+std::vector<std::string> resolve_name(const std::string& name, const NamedChannels& file,
+                                      const std::string& path) {
+  if (file.where.count(name)) return {name};
+  if (has_rgb(file, name)) return {name + ".R", name + ".G", name + ".B"};
+  throw_input(path, "has no channel or R,G,B layer '" + name + "'");
+}
+
+// The reference channel that marks background when the user names none: the standard `Z`, or
+// a depth layer's Z (`depth.Z`, Blender's `ViewLayer.Depth.Z`).
+std::string find_depth_channel(const NamedChannels& file) {
+  if (file.where.count("Z")) return "Z";
+  for (const std::string& name : file.names) {
+    std::string lower = name;
+    std::transform(lower.begin(), lower.end(), lower.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    if (lower == "depth.z" ||
+        (lower.size() > 8 && lower.compare(lower.size() - 8, 8, ".depth.z") == 0))
+      return name;
+  }
+  return {};
+}
+
+std::unique_ptr<OIIO::ImageInput> open_input(const std::string& path) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw_io(path, "no such file");
+  if (fs::is_directory(path, ec)) throw_io(path, "is a directory, not an image");
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) throw_io(path, "cannot read image: " + one_line(OIIO::geterror()));
+  return in;
+}
+
+FileChannels probe_channels(OIIO::ImageInput& in) {
+  FileChannels file;
+  for (int s = 0; in.seek_subimage(s, 0); ++s) {
+    file.subimage_names.push_back(in.spec().get_string_attribute("oiio:subimagename"));
+    file.channels.push_back(in.spec().channelnames);
+  }
+  return file;
+}
+
+Box2i data_window_of(const OIIO::ImageSpec& spec) {
+  return {spec.x, spec.y, spec.x + spec.width, spec.y + spec.height};
+}
+
+std::string describe(const Box2i& box) {
+  return std::to_string(box.width()) + "x" + std::to_string(box.height()) + " at (" +
+         std::to_string(box.x0) + ", " + std::to_string(box.y0) + ")";
+}
+
+// The data window all of `refs` share. Throws Error(kInput) when their parts differ.
+Box2i common_data_window(OIIO::ImageInput& in, const std::vector<ChannelRef>& refs,
+                         const std::string& path) {
+  Box2i window;
+  for (std::size_t i = 0; i < refs.size(); ++i) {
+    in.seek_subimage(refs[i].subimage, 0);
+    const Box2i w = data_window_of(in.spec());
+    if (i > 0 && w != window)
+      throw_input(path, "channel '" + refs[i].name + "' is in a part whose data window (" +
+                            describe(w) + ") differs from " + describe(window));
+    window = w;
+  }
+  return window;
+}
+
+// Reads `refs` into the planes of an image of the shared data window's size. One channel-range
+// read per subimage: OIIO decompresses the file again for every read.
+Image read_planes(OIIO::ImageInput& in, const std::vector<ChannelRef>& refs, const Box2i& window,
+                  const std::string& path) {
+  Image image(window.width(), window.height(), static_cast<int>(refs.size()));
+  std::map<int, std::vector<std::size_t>> by_subimage;
+  for (std::size_t i = 0; i < refs.size(); ++i) by_subimage[refs[i].subimage].push_back(i);
+  for (const auto& [subimage, items] : by_subimage) {
+    in.seek_subimage(subimage, 0);
+    const std::vector<std::string>& names = in.spec().channelnames;
+    std::vector<int> index;
+    for (std::size_t i : items)
+      index.push_back(
+          static_cast<int>(std::find(names.begin(), names.end(), refs[i].name) - names.begin()));
+    const int lo = *std::min_element(index.begin(), index.end());
+    const int hi = *std::max_element(index.begin(), index.end());
+    const int n = hi - lo + 1;
+    std::vector<float> interleaved(image.plane_size() * n);
+    if (!in.read_image(subimage, 0, lo, hi + 1, OIIO::TypeDesc::FLOAT, interleaved.data()))
+      throw_io(path, "cannot read pixels: " + one_line(in.geterror()));
+    for (std::size_t k = 0; k < items.size(); ++k) {
+      float* plane = image.plane(static_cast<int>(items[k]));
+      const int c = index[k] - lo;
+      for (std::size_t p = 0; p < image.plane_size(); ++p) plane[p] = interleaved[p * n + c];
+    }
+  }
+  return image;
+}
+
+// Same directory (so that the rename is atomic), hidden, and keeping the extension that tells
+// OIIO the format.
+std::string temp_path_for(const std::string& path) {
+  const fs::path target(path);
+  return (target.parent_path() / ("." + target.filename().string() + ".tmp" +
+                                  std::to_string(::getpid()) + target.extension().string()))
+      .string();
+}
+
+void write_difference(const std::string& path, const Image& diff,
+                      const std::vector<std::string>& names, const Box2i& data,
+                      const OIIO::ImageSpec& display) {
+  OIIO::ImageSpec spec(diff.width(), diff.height(), diff.channels(), OIIO::TypeDesc::FLOAT);
+  spec.x = data.x0;
+  spec.y = data.y0;
+  spec.full_x = display.full_x;
+  spec.full_y = display.full_y;
+  spec.full_width = display.full_width;
+  spec.full_height = display.full_height;
+  spec.channelnames = names;
+  spec.alpha_channel = -1;
+  spec.z_channel = -1;
+  spec.attribute("compression", "zip");
+  std::vector<float> interleaved(diff.data().size());
+  const int n = diff.channels();
+  for (int c = 0; c < n; ++c) {
+    const float* plane = diff.plane(c);
+    for (std::size_t p = 0; p < diff.plane_size(); ++p) interleaved[p * n + c] = plane[p];
+  }
+
+  const std::string temp = temp_path_for(path);
+  auto out = OIIO::ImageOutput::create(path);
+  if (!out) throw_io(path, "cannot write this format: " + one_line(OIIO::geterror()));
+  const bool written = out->open(temp, spec) &&
+                       out->write_image(OIIO::TypeDesc::FLOAT, interleaved.data()) && out->close();
+  if (!written) {
+    const std::string why = one_line(out->geterror());
+    std::remove(temp.c_str());
+    throw_io(path, "cannot write the difference image: " + why);
+  }
+  if (std::rename(temp.c_str(), path.c_str()) != 0) {
+    const std::string why = std::strerror(errno);
+    std::remove(temp.c_str());
+    throw_io(path, "cannot rename " + temp + " to it: " + why);
+  }
+}
+
+}  // namespace
+
+std::vector<LayerChannels> select_layers(const std::string& a_path, const FileChannels& a,
+                                         const std::string& b_path, const FileChannels& b,
+                                         const std::vector<std::string>& items) {
+  const NamedChannels a_named = name_channels(a), b_named = name_channels(b);
+  std::vector<std::pair<std::string, std::string>> pairs;  // (a channel, b channel)
+
+  if (items.empty()) {
+    for (const std::string& layer : rgb_layers(a_named)) {
+      if (!has_rgb(b_named, layer)) continue;
+      for (const char* c : {"R", "G", "B"}) {
+        const std::string name = layer.empty() ? c : layer + "." + c;
+        pairs.emplace_back(name, name);
+      }
+    }
+    if (pairs.empty()) {
+      auto list = [](const std::vector<std::string>& layers) {
+        std::vector<std::string> shown;
+        for (const std::string& l : layers) shown.push_back(l.empty() ? "R,G,B" : l);
+        return shown.empty() ? std::string("none") : join(shown, ", ");
+      };
+      throw_input(b_path, "no R,G,B layer in common with " + a_path + " (it has " +
+                              list(rgb_layers(b_named)) + "; the other has " +
+                              list(rgb_layers(a_named)) + "); choose with --channels");
+    }
+  }
+  for (const std::string& item : items) {
+    const auto eq = item.find('=');
+    const std::string a_name = item.substr(0, eq);
+    const std::string b_name = eq == std::string::npos ? a_name : item.substr(eq + 1);
+    if (a_name.empty() || b_name.empty() || b_name.find('=') != std::string::npos)
+      throw_usage("malformed channel item '" + item + "' (NAME or A_NAME=B_NAME)");
+    const std::vector<std::string> a_channels = resolve_name(a_name, a_named, a_path);
+    const std::vector<std::string> b_channels = resolve_name(b_name, b_named, b_path);
+    if (a_channels.size() != b_channels.size())
+      throw_input(b_path, "'" + b_name + "' is " + std::to_string(b_channels.size()) +
+                              " channel(s) but '" + a_name + "' in " + a_path + " is " +
+                              std::to_string(a_channels.size()));
+    for (std::size_t i = 0; i < a_channels.size(); ++i)
+      pairs.emplace_back(a_channels[i], b_channels[i]);
+  }
+
+  // Group by layer, keyed by both sides' layer names: `indirect=ViewLayer.DiffInd` compares a
+  // layer of A with a differently named one of B.
+  std::vector<LayerChannels> layers;
+  std::vector<std::pair<std::string, std::string>> keys;
+  for (const auto& [a_channel, b_channel] : pairs) {
+    const std::pair<std::string, std::string> key{layer_of(a_channel), layer_of(b_channel)};
+    auto it = std::find(keys.begin(), keys.end(), key);
+    if (it == keys.end()) {
+      keys.push_back(key);
+      LayerChannels layer;
+      layer.name = key.first == key.second ? key.first : key.first + "=" + key.second;
+      layers.push_back(std::move(layer));
+      it = keys.end() - 1;
+    }
+    LayerChannels& layer = layers[it - keys.begin()];
+    layer.a.push_back(a_channel);
+    layer.b.push_back(b_channel);
+  }
+  for (LayerChannels& layer : layers) {
+    layer.rgb = layer.a.size() == 3 && suffix_of(layer.a[0]) == "R" &&
+                suffix_of(layer.a[1]) == "G" && suffix_of(layer.a[2]) == "B";
+    if (layer.name.empty()) layer.name = join(layer.a, ",");
+  }
+  return layers;
+}
+
+FileCompareResult compare_files(const std::string& a_path, const std::string& b_path,
+                                const FileCompareOptions& options) {
+  auto a_in = open_input(a_path);
+  auto b_in = open_input(b_path);
+  const FileChannels a_file = probe_channels(*a_in), b_file = probe_channels(*b_in);
+  const NamedChannels a_named = name_channels(a_file), b_named = name_channels(b_file);
+
+  FileCompareResult out;
+  out.layers = select_layers(a_path, a_file, b_path, b_file, options.channels);
+  std::vector<ChannelRef> a_refs, b_refs;
+  std::vector<CompareLayer> compare_layers;
+  for (const LayerChannels& layer : out.layers) {
+    CompareLayer cl{layer.name, {}, layer.rgb};
+    for (std::size_t i = 0; i < layer.a.size(); ++i) {
+      cl.planes.push_back(static_cast<int>(a_refs.size()));
+      a_refs.push_back(a_named.where.at(layer.a[i]));
+      b_refs.push_back(b_named.where.at(layer.b[i]));
+      out.plane_names.push_back(layer.a[i]);
+    }
+    compare_layers.push_back(std::move(cl));
+  }
+
+  if (!options.all_pixels) {
+    out.depth_channel =
+        options.depth_channel.empty() ? find_depth_channel(b_named) : options.depth_channel;
+    if (!out.depth_channel.empty()) {
+      const auto it = b_named.where.find(out.depth_channel);
+      if (it == b_named.where.end())
+        throw_input(b_path, "has no depth channel '" + out.depth_channel + "'");
+      b_refs.push_back(it->second);  // read with the others, split off below
+    }
+  }
+
+  const Box2i a_window = common_data_window(*a_in, a_refs, a_path);
+  const Box2i b_window = common_data_window(*b_in, b_refs, b_path);
+  if (a_window != b_window)
+    throw_input(b_path, "size differs: data window " + describe(b_window) + ", but " +
+                            describe(a_window) + " in " + a_path);
+
+  const Image a = read_planes(*a_in, a_refs, a_window, a_path);
+  Image b = read_planes(*b_in, b_refs, b_window, b_path);
+  std::vector<std::uint8_t> background;
+  if (!out.depth_channel.empty()) {
+    background = background_from_depth(b.plane(b.channels() - 1), b.plane_size());
+    Image b_colour(b.width(), b.height(), b.channels() - 1);
+    std::copy(b.data().begin(), b.data().begin() + b_colour.data().size(), b_colour.data().begin());
+    b = std::move(b_colour);
+  }
+  CompareOptions compare = options.compare;
+  if (options.all_pixels) compare.exclude_zero_reference = false;
+  out.result = compare_images(a, b, compare_layers, compare, background);
+  if (out.result.pixels.max_plane >= 0) {
+    out.result.pixels.max_x += a_window.x0;
+    out.result.pixels.max_y += a_window.y0;
+  }
+
+  if (!options.diff_path.empty()) {
+    a_in->seek_subimage(a_refs.empty() ? 0 : a_refs[0].subimage, 0);
+    write_difference(options.diff_path, difference_image(a, b, options.diff_scale), out.plane_names,
+                     a_window, a_in->spec());
+  }
+  return out;
+}
+
+}  // namespace ssgi
