@@ -13,14 +13,18 @@ enum class TemporalMode { kNone, kEma, kWindow };
 // The seed's denoise pyramid: a joint bilateral filter at 1/4 resolution, then bilateral
 // upsampling with a blur at 1/2 and full resolution. Weights are Gaussian in each term.
 struct DenoiseSettings {
-  int levels = 2;              // downsampling steps: 2 filters at 1/4 resolution
+  int levels = 2;              // downsampling steps: 2 filters at 1/4 resolution, 0 at full
   int radius = 2;              // joint bilateral kernel radius in pixels at the coarsest level
   float sigma_spatial = 1.5f;  // spatial Gaussian, pixels at the coarsest level
-  // Depth term: relative depth difference |z_q - z_p| / z_p at which the weight is exp(-1/2).
+  // Depth term: the relative depth difference |z_q - z'_p| / z_p at which the weight is
+  // exp(-1/2), where z'_p is p's depth carried to q along p's screen-space depth gradient (so
+  // that a slanted plane counts as one surface).
   float sigma_depth = 0.02f;
   // Normal term: weight = max(0, dot(n_p, n_q))^normal_power.
   float normal_power = 32.0f;
-  int upsample_blur_radius = 1;  // the blur after each bilateral upsampling step
+  // The edge-aware blur after each bilateral upsampling step (spatial sigma = this radius,
+  // in pixels of that level; 0: none).
+  int upsample_blur_radius = 1;
 };
 
 // Everything that decides the GI result of a frame.

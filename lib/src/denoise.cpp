@@ -1,0 +1,420 @@
+// The denoise stage: the seed's bilateral pyramid (Sachdeva 2022), made plane-aware.
+//
+// Level 0 is the input; each coarser level halves the size, every 2x2 block becoming one sample
+// of one surface. The coarsest level is filtered with a joint bilateral filter, and each finer
+// level is rebuilt from the one below by joint bilateral upsampling (Kopf et al. 2007) and a
+// small edge-aware blur. Every weight is a spatial term times `range_weight`, which is ~0
+// between different surfaces, so light does not cross depth edges, creases or background.
+#include "denoise.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "parallel.h"
+#include "ssgi/error.h"
+
+namespace ssgi::detail {
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+// The guide channels of a pyramid level.
+enum GuideChannel { kDepth, kNormalX, kNormalY, kNormalZ, kGradientX, kGradientY, kGuideCount };
+
+// Beyond this exponent a weight is below 2e-22, far under the float resolution of any sum it
+// would join, so it is taken as 0 without calling exp.
+constexpr double kMaxExponent = 50.0;
+
+// Weight of a fine pixel's own value in bilateral upsampling. A pixel that no coarse sample
+// resembles (a feature thinner than a coarse pixel) keeps its own light instead of taking a
+// neighbouring surface's. A constant blend rather than a threshold keeps neighbouring pixels
+// from switching abruptly; where the coarse samples do match, it lets in 1e-3 of the noise.
+constexpr double kOwnValueWeight = 1e-3;
+
+struct Level {
+  Image radiance;  // 3 channels, 0 on background
+  // kGuideCount channels: depth (+inf on background), unit normal (0 where unknown), and the
+  // depth change per pixel along x and y on the pixel's own surface (see `axis_gradient`).
+  Image guides;
+};
+
+// One pixel's guides, in double so that no depth in float range overflows in the depth test.
+struct Surface {
+  double z, nx, ny, nz, gx, gy;
+};
+
+Surface load_surface(const Image& guides, std::size_t i) {
+  return {guides.plane(kDepth)[i],   guides.plane(kNormalX)[i],   guides.plane(kNormalY)[i],
+          guides.plane(kNormalZ)[i], guides.plane(kGradientX)[i], guides.plane(kGradientY)[i]};
+}
+
+bool is_surface(float z) { return z < kInf; }
+bool has_normal(const Surface& s) { return s.nx != 0 || s.ny != 0 || s.nz != 0; }
+
+struct RangeTerms {
+  double inv_sigma_depth;  // 1 / relative depth difference at which the weight is exp(-1/2)
+  double normal_power;
+  int integer_normal_power;  // normal_power when it is a whole number up to 64, else -1
+};
+
+RangeTerms make_range_terms(const DenoiseSettings& s) {
+  const double p = s.normal_power;
+  const bool whole = p == std::floor(p) && p <= 64;
+  return {1.0 / s.sigma_depth, p, whole ? static_cast<int>(p) : -1};
+}
+
+// x^p for x in [0, 1]. Whole powers (the default 32 among them) by repeated squaring, which
+// is several times faster than std::pow in the innermost loop.
+double normal_term(double x, const RangeTerms& terms) {
+  int n = terms.integer_normal_power;
+  if (n < 0) return std::pow(x, terms.normal_power);
+  double result = 1;
+  for (; n > 0; n >>= 1, x *= x) {
+    if (n & 1) result *= x;
+  }
+  return result;
+}
+
+// How much sample q belongs to p's surface: 1 for p itself, ~0 across an edge or a crease.
+// (dx, dy) is q's position relative to p, in p's pixels.
+double range_weight(const Surface& p, const Surface& q, double dx, double dy,
+                    const RangeTerms& terms) {
+  // q's depth against p's extrapolated along p's screen-space depth gradient, so that a slanted
+  // plane passes as one surface; relative to p's depth, so that the test does not depend on
+  // the scene's scale.
+  const double dz = (q.z - p.z) - p.gx * dx - p.gy * dy;
+  const double s = dz * terms.inv_sigma_depth / p.z;
+  const double exponent = 0.5 * s * s;
+  if (!(exponent < kMaxExponent)) return 0.0;  // also rejects NaN
+  double w = std::exp(-exponent);
+  const double cos_angle = p.nx * q.nx + p.ny * q.ny + p.nz * q.nz;
+  if (cos_angle > 0) {
+    w *= normal_term(std::min(cos_angle, 1.0), terms);
+  } else if (has_normal(p) && has_normal(q)) {
+    return 0.0;
+  }
+  // An unknown (zero) normal leaves the decision to depth alone.
+  return w;
+}
+
+// Level 0: the inputs with anything unusable made explicit, so that later passes need not
+// check. A depth that is not finite and positive is background; a normal that cannot be
+// normalised is unknown; a radiance that is not finite counts as 0.
+Level make_base_level(const Image& noisy, const Image& depth, const Image& normal) {
+  const int w = noisy.width(), h = noisy.height();
+  Level level{Image(w, h, 3), Image(w, h, kGuideCount)};
+  parallel_for_rows(h, [&](int y) {
+    for (int x = 0; x < w; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * w + x;
+      const float z = depth.plane(0)[i];
+      if (!(std::isfinite(z) && z > 0)) {
+        level.guides.plane(kDepth)[i] = kInf;  // radiance and normal stay 0
+        continue;
+      }
+      level.guides.plane(kDepth)[i] = z;
+      const double nx = normal.plane(0)[i], ny = normal.plane(1)[i], nz = normal.plane(2)[i];
+      const double length = std::sqrt(nx * nx + ny * ny + nz * nz);
+      if (length > 0 && std::isfinite(length)) {
+        level.guides.plane(kNormalX)[i] = static_cast<float>(nx / length);
+        level.guides.plane(kNormalY)[i] = static_cast<float>(ny / length);
+        level.guides.plane(kNormalZ)[i] = static_cast<float>(nz / length);
+      }
+      for (int c = 0; c < 3; ++c) {
+        const float v = noisy.plane(c)[i];
+        level.radiance.plane(c)[i] = std::isfinite(v) ? v : 0.0f;
+      }
+    }
+  });
+  return level;
+}
+
+// Of two one-sided depth differences, the smaller if they agree in sign (a plane, perhaps
+// with a depth edge on one side), else 0 (a ridge or a thin feature, not a plane). NaN when
+// either is missing.
+double agreeing_difference(double a, double b) {
+  if (!std::isfinite(a) || !std::isfinite(b)) return std::numeric_limits<double>::quiet_NaN();
+  if ((a < 0 && b > 0) || (a > 0 && b < 0)) return 0.0;
+  return std::abs(a) <= std::abs(b) ? a : b;
+}
+
+// Depth change per pixel at z[0] along one axis. `z_at(k)` is the depth k pixels away, +inf
+// outside the image or on background. Prefers the differences on both sides of the pixel;
+// at image and silhouette borders, the two on the side that exists. 0 when nothing agrees,
+// which only makes the depth test stricter there.
+template <typename DepthAt>
+double axis_gradient(const DepthAt& z_at) {
+  const double z0 = z_at(0);
+  const double before = z0 - z_at(-1), after = z_at(1) - z0;
+  for (double g :
+       {agreeing_difference(before, after), agreeing_difference(after, z_at(2) - z_at(1)),
+        agreeing_difference(z_at(-1) - z_at(-2), before)}) {
+    if (!std::isnan(g)) return g;
+  }
+  return 0.0;
+}
+
+void compute_depth_gradient(Image& guides) {
+  const int w = guides.width(), h = guides.height();
+  const float* depth = guides.plane(kDepth);
+  parallel_for_rows(h, [&](int y) {
+    for (int x = 0; x < w; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * w + x;
+      float gx = 0, gy = 0;
+      if (is_surface(depth[i])) {
+        gx = static_cast<float>(axis_gradient([&](int k) -> double {
+          const int xk = x + k;
+          return xk >= 0 && xk < w ? depth[i + k] : kInf;
+        }));
+        gy = static_cast<float>(axis_gradient([&](int k) -> double {
+          const int yk = y + k;
+          return yk >= 0 && yk < h ? depth[static_cast<std::size_t>(yk) * w + x] : kInf;
+        }));
+      }
+      guides.plane(kGradientX)[i] = gx;
+      guides.plane(kGradientY)[i] = gy;
+    }
+  });
+}
+
+Level make_level(Level level) {
+  compute_depth_gradient(level.guides);
+  return level;
+}
+
+// The index of the block sample that stands for the block: the one nearest the median depth,
+// so that the surface covering most of the block wins; on a tie the nearer one, since thin
+// foreground features are the first to vanish from a pyramid.
+int pick_representative(const Surface* samples, int count) {
+  std::array<double, 4> depths{};
+  for (int s = 0; s < count; ++s) depths[s] = samples[s].z;
+  std::sort(depths.begin(), depths.begin() + count);
+  const double median =
+      count % 2 ? depths[count / 2] : 0.5 * depths[count / 2 - 1] + 0.5 * depths[count / 2];
+  int best = 0;
+  for (int s = 1; s < count; ++s) {
+    const double d = std::abs(samples[s].z - median), best_d = std::abs(samples[best].z - median);
+    if (d < best_d || (d == best_d && samples[s].z < samples[best].z)) best = s;
+  }
+  return best;
+}
+
+// Halves the level (rounding up): each 2x2 block becomes the weighted mean of its surface
+// samples, weighted by their resemblance to the block's representative, so that a block on an
+// edge keeps one surface instead of a blend of two. Depths are moved to the block centre along
+// the representative's gradient, which is where the upsampling and the filter place them.
+Level downsample_with_guides(const Level& fine, const RangeTerms& terms) {
+  const int fw = fine.radiance.width(), fh = fine.radiance.height();
+  const int w = (fw + 1) / 2, h = (fh + 1) / 2;
+  Level coarse{Image(w, h, 3), Image(w, h, kGuideCount)};
+  parallel_for_rows(h, [&](int y) {
+    for (int x = 0; x < w; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * w + x;
+      std::array<Surface, 4> samples;
+      std::array<std::size_t, 4> index;
+      std::array<int, 4> sx, sy;
+      int count = 0;
+      for (int fy = 2 * y; fy < std::min(2 * y + 2, fh); ++fy) {
+        for (int fx = 2 * x; fx < std::min(2 * x + 2, fw); ++fx) {
+          const std::size_t j = static_cast<std::size_t>(fy) * fw + fx;
+          if (!is_surface(fine.guides.plane(kDepth)[j])) continue;
+          samples[count] = load_surface(fine.guides, j);
+          index[count] = j;
+          sx[count] = fx;
+          sy[count] = fy;
+          ++count;
+        }
+      }
+      if (count == 0) {
+        coarse.guides.plane(kDepth)[i] = kInf;
+        continue;
+      }
+      const int r = pick_representative(samples.data(), count);
+      const Surface& rep = samples[r];
+      const double centre_x = 2 * x + 0.5, centre_y = 2 * y + 0.5;
+      double weight_sum = 0, z = 0, nx = 0, ny = 0, nz = 0;
+      std::array<double, 3> light{};
+      for (int s = 0; s < count; ++s) {
+        const Surface& q = samples[s];
+        const double wq = s == r ? 1.0 : range_weight(rep, q, sx[s] - sx[r], sy[s] - sy[r], terms);
+        if (wq == 0) continue;
+        weight_sum += wq;
+        z += wq * (q.z + rep.gx * (centre_x - sx[s]) + rep.gy * (centre_y - sy[s]));
+        nx += wq * q.nx;
+        ny += wq * q.ny;
+        nz += wq * q.nz;
+        for (int c = 0; c < 3; ++c) light[c] += wq * fine.radiance.plane(c)[index[s]];
+      }
+      // weight_sum >= 1, the representative's own weight.
+      z /= weight_sum;
+      // Moving a depth along a steep gradient could in theory take it behind the camera or
+      // beyond float range.
+      const bool representable = z > 0 && z <= std::numeric_limits<float>::max();
+      coarse.guides.plane(kDepth)[i] = static_cast<float>(representable ? z : rep.z);
+      const double length = std::sqrt(nx * nx + ny * ny + nz * nz);
+      if (length > 0) {
+        coarse.guides.plane(kNormalX)[i] = static_cast<float>(nx / length);
+        coarse.guides.plane(kNormalY)[i] = static_cast<float>(ny / length);
+        coarse.guides.plane(kNormalZ)[i] = static_cast<float>(nz / length);
+      }
+      for (int c = 0; c < 3; ++c) {
+        coarse.radiance.plane(c)[i] = static_cast<float>(light[c] / weight_sum);
+      }
+    }
+  });
+  return coarse;
+}
+
+// Gaussian weights exp(-k^2 / (2 sigma^2)) for k = 0..radius.
+std::vector<double> gaussian_taps(int radius, double sigma) {
+  std::vector<double> taps(radius + 1);
+  for (int k = 0; k <= radius; ++k) taps[k] = std::exp(-0.5 * (k / sigma) * (k / sigma));
+  return taps;
+}
+
+// Joint bilateral filter of `radiance` guided by `guides`: a square window of `radius`, a
+// spatial Gaussian times `range_weight`. Used both at the coarsest level and as the blur
+// after each upsampling step.
+Image joint_bilateral(const Image& radiance, const Image& guides, int radius, double sigma_spatial,
+                      const RangeTerms& terms) {
+  const int w = radiance.width(), h = radiance.height();
+  const std::vector<double> taps = gaussian_taps(radius, sigma_spatial);
+  Image out(w, h, 3);
+  parallel_for_rows(h, [&](int y) {
+    for (int x = 0; x < w; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * w + x;
+      if (!is_surface(guides.plane(kDepth)[i])) continue;
+      const Surface p = load_surface(guides, i);
+      double weight_sum = 0;
+      std::array<double, 3> light{};
+      for (int qy = std::max(0, y - radius); qy <= std::min(h - 1, y + radius); ++qy) {
+        for (int qx = std::max(0, x - radius); qx <= std::min(w - 1, x + radius); ++qx) {
+          const std::size_t j = static_cast<std::size_t>(qy) * w + qx;
+          if (!is_surface(guides.plane(kDepth)[j])) continue;
+          const double spatial = taps[std::abs(qx - x)] * taps[std::abs(qy - y)];
+          // p itself counts fully, so that the sum below is never 0.
+          const double range =
+              j == i ? 1.0 : range_weight(p, load_surface(guides, j), qx - x, qy - y, terms);
+          const double wq = spatial * range;
+          if (wq == 0) continue;
+          weight_sum += wq;
+          for (int c = 0; c < 3; ++c) light[c] += wq * radiance.plane(c)[j];
+        }
+      }
+      for (int c = 0; c < 3; ++c) out.plane(c)[i] = static_cast<float>(light[c] / weight_sum);
+    }
+  });
+  return out;
+}
+
+// The two coarse samples around fine coordinate `x` along one axis and the bilinear weight of
+// the second: a fine pixel centre lies at coarse coordinate x/2 - 1/4.
+struct AxisTaps {
+  int first;
+  double second_weight;
+};
+AxisTaps upsampling_taps(int x) {
+  return x % 2 == 0 ? AxisTaps{x / 2 - 1, 0.75} : AxisTaps{x / 2, 0.25};
+}
+
+// Joint bilateral upsampling (Kopf et al. 2007) of `coarse_light` to `fine`'s size: each fine
+// pixel takes its 4 nearest coarse samples with bilinear weights times their resemblance to
+// it, plus a little of its own unfiltered value (see kOwnValueWeight).
+Image bilateral_upsample(const Image& coarse_light, const Image& coarse_guides, const Level& fine,
+                         const RangeTerms& terms) {
+  const int w = fine.radiance.width(), h = fine.radiance.height();
+  const int cw = coarse_light.width(), ch = coarse_light.height();
+  Image out(w, h, 3);
+  parallel_for_rows(h, [&](int y) {
+    const AxisTaps ty = upsampling_taps(y);
+    for (int x = 0; x < w; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * w + x;
+      if (!is_surface(fine.guides.plane(kDepth)[i])) continue;
+      const Surface p = load_surface(fine.guides, i);
+      const AxisTaps tx = upsampling_taps(x);
+      double weight_sum = kOwnValueWeight;
+      std::array<double, 3> light{};
+      for (int c = 0; c < 3; ++c) light[c] = kOwnValueWeight * fine.radiance.plane(c)[i];
+      for (int ky = 0; ky < 2; ++ky) {
+        const int cy = std::clamp(ty.first + ky, 0, ch - 1);
+        const double wy = ky ? ty.second_weight : 1 - ty.second_weight;
+        for (int kx = 0; kx < 2; ++kx) {
+          const int cx = std::clamp(tx.first + kx, 0, cw - 1);
+          const double wx = kx ? tx.second_weight : 1 - tx.second_weight;
+          const std::size_t j = static_cast<std::size_t>(cy) * cw + cx;
+          if (!is_surface(coarse_guides.plane(kDepth)[j])) continue;
+          // Coarse sample centres sit at fine coordinate 2c + 1/2 (see downsample_with_guides).
+          const double wq = wx * wy *
+                            range_weight(p, load_surface(coarse_guides, j), 2 * cx + 0.5 - x,
+                                         2 * cy + 0.5 - y, terms);
+          if (wq == 0) continue;
+          weight_sum += wq;
+          for (int c = 0; c < 3; ++c) light[c] += wq * coarse_light.plane(c)[j];
+        }
+      }
+      for (int c = 0; c < 3; ++c) out.plane(c)[i] = static_cast<float>(light[c] / weight_sum);
+    }
+  });
+  return out;
+}
+
+void check_settings(const DenoiseSettings& s) {
+  auto fail = [](const std::string& what, double value) {
+    throw_usage("denoise: " + what + " (got " + std::to_string(value) + ")");
+  };
+  if (s.levels < 0) fail("levels must be >= 0", s.levels);
+  if (s.radius < 0) fail("radius must be >= 0", s.radius);
+  if (s.upsample_blur_radius < 0) fail("upsample_blur_radius must be >= 0", s.upsample_blur_radius);
+  if (!(s.sigma_spatial > 0 && std::isfinite(s.sigma_spatial)))
+    fail("sigma_spatial must be positive", s.sigma_spatial);
+  if (!(s.sigma_depth > 0 && std::isfinite(s.sigma_depth)))
+    fail("sigma_depth must be positive", s.sigma_depth);
+  if (!(s.normal_power >= 0 && std::isfinite(s.normal_power)))
+    fail("normal_power must be >= 0", s.normal_power);
+}
+
+void check_shapes(const Image& noisy, const Image& depth, const Image& normal) {
+  const bool same_size = depth.width() == noisy.width() && depth.height() == noisy.height() &&
+                         normal.width() == noisy.width() && normal.height() == noisy.height();
+  if (noisy.channels() != 3 || depth.channels() != 1 || normal.channels() != 3 || !same_size) {
+    throw Error(ErrorKind::kInternal, {},
+                "denoise: expected 3-channel light, 1-channel depth and 3-channel normal of "
+                "one size");
+  }
+}
+
+}  // namespace
+
+Image denoise_pyramid(const Image& noisy, const Image& depth, const Image& normal,
+                      const DenoiseSettings& settings) {
+  check_settings(settings);
+  check_shapes(noisy, depth, normal);
+  if (noisy.width() == 0 || noisy.height() == 0) return Image(noisy.width(), noisy.height(), 3);
+  const RangeTerms terms = make_range_terms(settings);
+
+  std::vector<Level> levels;
+  levels.push_back(make_level(make_base_level(noisy, depth, normal)));
+  // A 1x1 level cannot shrink further; more levels would repeat it.
+  while (static_cast<int>(levels.size()) <= settings.levels &&
+         (levels.back().radiance.width() > 1 || levels.back().radiance.height() > 1)) {
+    levels.push_back(make_level(downsample_with_guides(levels.back(), terms)));
+  }
+
+  Image light = joint_bilateral(levels.back().radiance, levels.back().guides, settings.radius,
+                                settings.sigma_spatial, terms);
+  for (int l = static_cast<int>(levels.size()) - 2; l >= 0; --l) {
+    light = bilateral_upsample(light, levels[l + 1].guides, levels[l], terms);
+    if (settings.upsample_blur_radius > 0) {
+      // The blur's spatial sigma is its radius: a gentle 3x3 at the default radius 1.
+      light = joint_bilateral(light, levels[l].guides, settings.upsample_blur_radius,
+                              settings.upsample_blur_radius, terms);
+    }
+  }
+  return light;
+}
+
+}  // namespace ssgi::detail

@@ -1,0 +1,20 @@
+// The denoise stage: the seed's depth- and normal-aware bilateral pyramid (Sachdeva 2022).
+#pragma once
+
+#include "ssgi/image.h"
+#include "ssgi/settings.h"
+
+namespace ssgi::detail {
+
+// Denoises the indirect light `noisy` (3 channels) guided by `depth` (1 channel, planar camera
+// z, +inf where there is no surface) and `normal` (3 channels, unit camera-space normals):
+// downsample `settings.levels` times with the guides, joint bilateral filter at the coarsest
+// level, then joint bilateral upsampling with an edge-aware blur back up to full resolution.
+// Returns 3 channels of the same size: finite everywhere, 0 on background pixels, and each
+// surface pixel a convex combination of surface inputs (non-finite inputs count as 0). The
+// result is the same for any thread count. Throws ssgi::Error (kUsage) on invalid settings and
+// (kInternal) when the images disagree in size or channel count.
+Image denoise_pyramid(const Image& noisy, const Image& depth, const Image& normal,
+                      const DenoiseSettings& settings);
+
+}  // namespace ssgi::detail
