@@ -30,6 +30,7 @@ enum LongOnly : int {
   kThickness,
   kStartOffset,
   kBounces,
+  kMiss,
   kEnv,
   kEnvUp,
   kEnvColor,
@@ -64,6 +65,7 @@ const option kOptions[] = {
     {"thickness", required_argument, nullptr, kThickness},
     {"start-offset", required_argument, nullptr, kStartOffset},
     {"bounces", required_argument, nullptr, kBounces},
+    {"miss", required_argument, nullptr, kMiss},
     {"env", required_argument, nullptr, kEnv},
     {"env-up", required_argument, nullptr, kEnvUp},
     {"env-color", required_argument, nullptr, kEnvColor},
@@ -135,7 +137,9 @@ const char* common_options_help() {
          "  --max-distance D      longest ray in scene units, 0 = unlimited (default 0)\n"
          "  --thickness T         a depth pixel is a slab from z to z*(1+T) (default 0.1)\n"
          "  --start-offset F      rays start F*depth off the surface (default 0.002)\n"
-         "  --bounces N           diffuse bounces within the frame (default 2)\n"
+         "  --bounces N           diffuse bounces within the frame (default 8)\n"
+         "  --miss MODE           what rays that miss bring: auto (default), frame, extend\n"
+         "                        or env (man ssgi, MISSES)\n"
          "  --env FILE            lat-long environment map for rays that miss\n"
          "  --env-up y|z          the map's up axis in world space (default y)\n"
          "  --env-color R,G,B     constant radiance for rays that miss (default 0)\n"
@@ -189,6 +193,15 @@ CommonOptions parse_common_options(int argc, char** argv, bool need_output) {
       case kThickness: gi.thickness = parse_double("thickness", a); break;
       case kStartOffset: gi.start_offset = parse_double("start-offset", a); break;
       case kBounces: gi.bounces = static_cast<int>(parse_long("bounces", a, 1, 64)); break;
+      case kMiss: {
+        const std::string mode = a;
+        if (mode == "frame") gi.miss = ssgi::MissMode::kFrame;
+        else if (mode == "env") gi.miss = ssgi::MissMode::kEnvironment;
+        else if (mode == "extend") gi.miss = ssgi::MissMode::kExtend;
+        else if (mode == "auto") gi.miss = ssgi::MissMode::kAuto;
+        else ssgi::throw_usage("--miss must be auto, env, extend or frame");
+        break;
+      }
       case kEnv: gi.env_map = a; break;
       case kEnvUp: {
         const std::string up = a;

@@ -240,8 +240,8 @@ void convert_motion(const std::vector<std::vector<float>>& planes, const MotionC
   const double sy = (mc.in_ndc ? display.height() : mc.scale) * (mc.y_up ? -1.0 : 1.0);
   Image xy(w, h, 2);
   for (std::size_t p = 0; p < xy.plane_size(); ++p) {
-    xy.plane(0)[p] = static_cast<float>(finite_or(planes[0][p], 0.0f) * sx);
-    xy.plane(1)[p] = static_cast<float>(finite_or(planes[1][p], 0.0f) * sy);
+    xy.plane(0)[p] = static_cast<float>((finite_or(planes[0][p], 0.0f) + mc.offset) * sx);
+    xy.plane(1)[p] = static_cast<float>((finite_or(planes[1][p], 0.0f) + mc.offset) * sy);
   }
   if (mc.xy_to_previous) {
     g->motion_prev = std::move(xy);

@@ -89,6 +89,7 @@ struct Tracer {
     if (!clip(-dx, sx0) || !clip(dx, width - sx0) || !clip(-dy, sy0) ||
         !clip(dy, height - sy0) || !(f_hi > f_lo))
       return -1;
+    const bool leaves_screen = f_hi < 1.0f;
 
     const float span = f_hi - f_lo;
     const float length_px = std::max(std::fabs(dx), std::fabs(dy)) * span;
@@ -110,7 +111,28 @@ struct Tracer {
       const float za = ha > 0 ? 1.0f / ha : inf, zb = hb > 0 ? 1.0f / hb : inf;
       if (model.hits(zs, std::min(za, zb), std::max(za, zb))) return iy * width + ix;
     }
+    if (leaves_screen && settings.miss == MissMode::kExtend)
+      return extend_edge(o, d, sx0 + dx * f_hi, sy0 + dy * f_hi);
     return -1;
+  }
+
+  // MissMode::kExtend: the surface at the pixel where the ray leaves the screen continues as
+  // its tangent plane beyond the edge; a ray that meets that plane from its front side takes
+  // the edge pixel's light. Returns the edge pixel's index, or -1.
+  int extend_edge(const Vec3f& o, const Vec3f& d, float exit_x, float exit_y) const {
+    const int ix = std::clamp(static_cast<int>(std::floor(exit_x)), 0, width - 1);
+    const int iy = std::clamp(static_cast<int>(std::floor(exit_y)), 0, height - 1);
+    const float ze = g.depth.at(0, ix, iy);
+    if (!std::isfinite(ze)) return -1;
+    const Vec3f n{g.normal.at(0, ix, iy), g.normal.at(1, ix, iy), g.normal.at(2, ix, iy)};
+    const Vec3d pe = g.camera.unproject(ix + offset_x + 0.5, iy + offset_y + 0.5, ze);
+    const float facing = n.x * d.x + n.y * d.y + n.z * d.z;
+    if (!(facing < 0)) return -1;
+    const float t = (n.x * (static_cast<float>(pe.x) - o.x) + n.y * (static_cast<float>(pe.y) - o.y) +
+                     n.z * (static_cast<float>(pe.z) - o.z)) /
+                    facing;
+    if (!(t > 0) || (settings.max_distance > 0 && t > settings.max_distance)) return -1;
+    return iy * width + ix;
   }
 
   // Calls on_ray(k, hit_index, direction) for each ray of surface pixel (x, y).
@@ -141,26 +163,32 @@ RayHits march_screen_space(const GBuffer& g, const GiSettings& settings, const E
   RayHits hits;
   hits.rays = rays;
   hits.hit.assign(static_cast<std::size_t>(w) * h * rays, -1);
-  hits.miss_sum = Image(w, h, 3);
+  hits.env_sum = Image(w, h, 3);
+  hits.miss_count = Image(w, h, 1);
   parallel_for_rows(h, [&](int y) {
     for (int x = 0; x < w; ++x) {
       if (!g.is_surface(x, y)) continue;
       std::int32_t* out = &hits.hit[(static_cast<std::size_t>(y) * w + x) * rays];
-      float miss[3] = {0, 0, 0};
+      float env_sum[3] = {0, 0, 0};
+      int misses = 0;
       tracer.trace_pixel(x, y, [&](int k, int hit, const Vec3f& d) {
         out[k] = hit;
-        if (hit < 0 && !env.is_black()) {
+        if (hit >= 0) return;
+        ++misses;
+        if (!env.is_black()) {
           const auto l = tracer.miss_radiance(d);
-          for (int c = 0; c < 3; ++c) miss[c] += l[c];
+          for (int c = 0; c < 3; ++c) env_sum[c] += l[c];
         }
       });
-      for (int c = 0; c < 3; ++c) hits.miss_sum.at(c, x, y) = miss[c];
+      for (int c = 0; c < 3; ++c) hits.env_sum.at(c, x, y) = env_sum[c];
+      hits.miss_count.at(0, x, y) = static_cast<float>(misses);
     }
   });
   return hits;
 }
 
-Image gather_indirect(const GBuffer& g, const RayHits& hits, const Image& radiance) {
+Image gather_indirect(const GBuffer& g, const RayHits& hits, const Image& radiance,
+                      const MissLight& miss) {
   const int w = g.width(), h = g.height(), rays = hits.rays;
   Image out(w, h, 3);
   const float inv_rays = 1.0f / static_cast<float>(rays);
@@ -171,7 +199,8 @@ Image gather_indirect(const GBuffer& g, const RayHits& hits, const Image& radian
       const std::int32_t* hit = &hits.hit[pixel * rays];
       for (int c = 0; c < 3; ++c) {
         const float* l = radiance.plane(c);
-        float sum = hits.miss_sum.plane(c)[pixel];
+        float sum = miss.env_weight * hits.env_sum.plane(c)[pixel] +
+                    hits.miss_count.plane(0)[pixel] * miss.frame_radiance[c];
         for (int k = 0; k < rays; ++k)
           if (hit[k] >= 0) sum += l[hit[k]];
         out.plane(c)[pixel] = sum * inv_rays;
@@ -182,7 +211,7 @@ Image gather_indirect(const GBuffer& g, const RayHits& hits, const Image& radian
 }
 
 Image march_and_gather(const GBuffer& g, const GiSettings& settings, const Environment& env,
-                       const Image& radiance) {
+                       const Image& radiance, const MissLight& miss) {
   const Tracer tracer(g, settings, env);
   const int w = g.width(), h = g.height();
   Image out(w, h, 3);
@@ -194,8 +223,12 @@ Image march_and_gather(const GBuffer& g, const GiSettings& settings, const Envir
       tracer.trace_pixel(x, y, [&](int, int hit, const Vec3f& d) {
         if (hit >= 0) {
           for (int c = 0; c < 3; ++c) sum[c] += radiance.plane(c)[hit];
-        } else if (!env.is_black()) {
-          const auto l = tracer.miss_radiance(d);
+        } else {
+          std::array<float, 3> l = miss.frame_radiance;
+          if (!env.is_black()) {
+            const auto e = tracer.miss_radiance(d);
+            for (int c = 0; c < 3; ++c) l[c] += miss.env_weight * e[c];
+          }
           for (int c = 0; c < 3; ++c) sum[c] += l[c];
         }
       });

@@ -2,6 +2,7 @@
 // buffer (the surface model of surface_model.h) until they hit a pixel or miss.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -13,11 +14,19 @@ namespace ssgi::detail {
 
 // Where each ray of each pixel ended, kept so that further bounces re-gather without
 // re-marching: the hit pixel's index (y * width + x, data window) or -1 for a miss, and per
-// pixel the sum of the environment radiance its missing rays brought.
+// pixel the number of missing rays and the sum of the environment radiance they saw.
 struct RayHits {
   int rays = 0;
   std::vector<std::int32_t> hit;  // width * height * rays
-  Image miss_sum;                 // 3 channels
+  Image env_sum;                  // 3 channels
+  Image miss_count;               // 1 channel
+};
+
+// What a missing ray brings: env_weight x the environment in its direction, plus a constant
+// estimated from the frame (see MissMode).
+struct MissLight {
+  float env_weight = 1.0f;
+  std::array<float, 3> frame_radiance = {0, 0, 0};
 };
 
 // Marches settings.rays rays per surface pixel and records their ends.
@@ -26,10 +35,11 @@ RayHits march_screen_space(const GBuffer& g, const GiSettings& settings,
 
 // Indirect light per pixel: the mean over its rays of `radiance` at the hit pixel, or the
 // environment for a miss. Background pixels get 0.
-Image gather_indirect(const GBuffer& g, const RayHits& hits, const Image& radiance);
+Image gather_indirect(const GBuffer& g, const RayHits& hits, const Image& radiance,
+                      const MissLight& miss);
 
 // march_screen_space followed by gather_indirect, without storing the hits (one bounce).
 Image march_and_gather(const GBuffer& g, const GiSettings& settings, const Environment& env,
-                       const Image& radiance);
+                       const Image& radiance, const MissLight& miss);
 
 }  // namespace ssgi::detail

@@ -10,6 +10,24 @@ namespace ssgi {
 enum class DenoiseMode { kNone, kPyramid };
 enum class TemporalMode { kNone, kEma, kWindow };
 
+// What a ray that leaves the screen (or ends without a hit) brings back.
+enum class MissMode {
+  // The environment: --env map or --env-color (default black).
+  kEnvironment,
+  // An estimate from the frame: the environment weighted by the fraction of background
+  // pixels, plus the mean light the frame's surfaces reflect weighted by the rest. It assumes
+  // the world outside the frame looks, on average, like the world inside it: an interior
+  // continues with more walls, an exterior with as much sky as the frame shows.
+  kFrame,
+  // The surface where the ray leaves the screen continues beyond the edge as its tangent
+  // plane; a ray that meets it takes that edge pixel's light, any other miss the environment.
+  kExtend,
+  // kFrame when the frame's border shows the camera is enclosed (walls, floor and ceiling
+  // running alongside the view: an interior), kEnvironment when it does not (a set seen from
+  // outside, sky), with a smooth ramp between. See man/ssgi.1, MISSES.
+  kAuto,
+};
+
 // The seed's denoise pyramid: a joint bilateral filter at 1/4 resolution, then bilateral
 // upsampling with a blur at 1/2 and full resolution. Weights are Gaussian in each term.
 struct DenoiseSettings {
@@ -39,8 +57,9 @@ struct GiSettings {
   // A ray starts this fraction of the pixel's depth off the surface along its normal, so that
   // it does not hit its own pixel.
   double start_offset = 0.002;
-  int bounces = 2;
-  // Misses: the environment map (lat-long EXR, empty for none) or else this colour.
+  int bounces = 8;
+  MissMode miss = MissMode::kAuto;
+  // The environment: the map (lat-long EXR, empty for none) or else this colour.
   std::string env_map;
   char env_up = 'y';  // the map's up axis in world space: 'y' (OpenEXR) or 'z' (Blender)
   std::array<float, 3> env_color = {0, 0, 0};

@@ -1,0 +1,89 @@
+// Error of ssgi's output against a path-traced truth that the input carries (Cycles' DiffInd):
+// relative RMSE (RMSE / mean of the truth over surface pixels, all channels) of `indirect`
+// against DiffInd, and of the composite against (DiffDir + DiffInd) x DiffCol + Emit, plus
+// the same for no GI at all. Usage: truth_error INPUT.exr OUTPUT.exr [LAYER_PREFIX]
+#include <OpenImageIO/imageio.h>
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace {
+
+using Planes = std::map<std::string, std::vector<float>>;
+
+Planes read_all(const std::string& path, int* w, int* h) {
+  auto in = OIIO::ImageInput::open(path);
+  if (!in) {
+    std::fprintf(stderr, "truth_error: %s: %s\n", path.c_str(), OIIO::geterror().c_str());
+    std::exit(4);
+  }
+  const OIIO::ImageSpec& spec = in->spec();
+  *w = spec.width;
+  *h = spec.height;
+  const int n = spec.nchannels;
+  const std::size_t pixels = static_cast<std::size_t>(spec.width) * spec.height;
+  std::vector<float> data(pixels * n);
+  in->read_image(0, 0, 0, n, OIIO::TypeDesc::FLOAT, data.data());
+  Planes planes;
+  for (int c = 0; c < n; ++c) {
+    auto& p = planes[spec.channelnames[c]];
+    p.resize(pixels);
+    for (std::size_t i = 0; i < pixels; ++i) p[i] = data[i * n + c];
+  }
+  return planes;
+}
+
+const std::vector<float>& plane(const Planes& p, const std::string& name) {
+  auto it = p.find(name);
+  if (it == p.end()) {
+    std::fprintf(stderr, "truth_error: missing channel %s\n", name.c_str());
+    std::exit(3);
+  }
+  return it->second;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 3) {
+    std::fprintf(stderr, "usage: truth_error INPUT.exr OUTPUT.exr [LAYER_PREFIX]\n");
+    return 2;
+  }
+  const std::string prefix = argc > 3 ? std::string(argv[3]) + "." : "";
+  int w, h, w2, h2;
+  const Planes in = read_all(argv[1], &w, &h);
+  const Planes out = read_all(argv[2], &w2, &h2);
+  const std::string v = "ViewLayer.";
+  const auto& depth = plane(in, v + "Depth.Z");
+  double se_ind = 0, se_comp = 0, se_ind0 = 0, se_comp0 = 0, sum_ind = 0, sum_comp = 0;
+  std::size_t n = 0;
+  const char* rgb[3] = {"R", "G", "B"};
+  for (int c = 0; c < 3; ++c) {
+    const auto& truth_ind = plane(in, v + "DiffInd." + rgb[c]);
+    const auto& dir = plane(in, v + "DiffDir." + rgb[c]);
+    const auto& col = plane(in, v + "DiffCol." + rgb[c]);
+    const auto& emit = plane(in, v + "Emit." + rgb[c]);
+    const auto& ind = plane(out, prefix + "indirect." + rgb[c]);
+    const auto& comp = plane(out, prefix + rgb[c]);
+    for (std::size_t i = 0; i < depth.size(); ++i) {
+      if (!(depth[i] < 1e9f)) continue;
+      const double truth_comp = (dir[i] + truth_ind[i]) * col[i] + emit[i];
+      const double none_comp = dir[i] * col[i] + emit[i];
+      se_ind += (ind[i] - truth_ind[i]) * double(ind[i] - truth_ind[i]);
+      se_ind0 += truth_ind[i] * double(truth_ind[i]);
+      se_comp += (comp[i] - truth_comp) * (comp[i] - truth_comp);
+      se_comp0 += (none_comp - truth_comp) * (none_comp - truth_comp);
+      sum_ind += truth_ind[i];
+      sum_comp += truth_comp;
+      ++n;
+    }
+  }
+  const double mean_ind = sum_ind / n, mean_comp = sum_comp / n;
+  std::printf("%.4f %.4f %.4f %.4f\n", std::sqrt(se_ind0 / n) / mean_ind,
+              std::sqrt(se_ind / n) / mean_ind, std::sqrt(se_comp0 / n) / mean_comp,
+              std::sqrt(se_comp / n) / mean_comp);
+  return 0;
+}
