@@ -10,6 +10,8 @@
 #include "denoise.h"
 #include "environment.h"
 #include "march.h"
+#include "misses.h"
+#include "reference.h"
 #include "ssgi/error.h"
 
 namespace ssgi {
@@ -109,97 +111,21 @@ Pipeline::~Pipeline() = default;
 const Plan& Pipeline::plan() const { return impl_->plan; }
 const GiSettings& Pipeline::settings() const { return impl_->settings; }
 
-namespace {
-
-// How enclosed the camera is, from the frame's border: the fraction of border pixels whose
-// surface runs alongside the view on its side (a ceiling along the top edge faces down, a
-// floor along the bottom faces up, side walls face inwards). A room seen from inside scores
-// near 1; a set seen from outside (a backdrop along the top, sky) scores low.
-double enclosure(const GBuffer& g) {
-  const int w = g.width(), h = g.height();
-  const int ring = std::max(1, std::min(w, h) / 50);
-  std::size_t border = 0, inward = 0;
-  for (int y = 0; y < h; ++y) {
-    for (int x = 0; x < w; ++x) {
-      const int dl = x, dr = w - 1 - x, dt = y, db = h - 1 - y;
-      const int nearest = std::min(std::min(dl, dr), std::min(dt, db));
-      if (nearest >= ring) continue;
-      ++border;
-      if (!g.is_surface(x, y)) continue;
-      const float nx = g.normal.at(0, x, y), ny = g.normal.at(1, x, y);
-      const bool faces_in = (nearest == dt && ny < -0.5f) || (nearest == db && ny > 0.5f) ||
-                            (nearest == dl && nx > 0.5f) || (nearest == dr && nx < -0.5f);
-      inward += faces_in ? 1 : 0;
-    }
-  }
-  return border ? static_cast<double>(inward) / border : 0.0;
-}
-
-// The weight of the frame estimate for misses (MissMode::kFrame, kAuto): the fraction of the
-// frame that shows surfaces, and for kAuto how enclosed the camera is, ramped so that a score
-// near the threshold does not switch abruptly between frames.
-double closure_weight(const GBuffer& g, MissMode mode) {
-  if (mode == MissMode::kEnvironment || mode == MissMode::kExtend) return 0.0;
-  const int w = g.width(), h = g.height();
-  std::size_t surfaces = 0;
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) surfaces += g.is_surface(x, y) ? 1 : 0;
-  const double surface_fraction = static_cast<double>(surfaces) / (static_cast<double>(w) * h);
-  if (mode == MissMode::kFrame) return surface_fraction;
-  const double t = std::clamp((enclosure(g) - 0.4) / 0.2, 0.0, 1.0);
-  return surface_fraction * t * t * (3 - 2 * t);
-}
-
-// What misses bring when gathering `radiance`: the environment weighted by 1 - closure, plus
-// closure x the mean light the frame's surfaces reflect.
-detail::MissLight miss_light(const GBuffer& g, const Image& radiance, double closure) {
-  detail::MissLight miss;
-  miss.env_weight = static_cast<float>(1.0 - closure);
-  if (closure <= 0) return miss;
-  const int w = g.width(), h = g.height();
-  // Sums in double, in a fixed order: the same bits for any thread count.
-  double sum[3] = {0, 0, 0};
-  std::size_t surfaces = 0;
-  for (int y = 0; y < h; ++y) {
-    for (int x = 0; x < w; ++x) {
-      if (!g.is_surface(x, y)) continue;
-      ++surfaces;
-      for (int c = 0; c < 3; ++c) sum[c] += radiance.at(c, x, y);
-    }
-  }
-  for (int c = 0; c < 3; ++c)
-    miss.frame_radiance[c] = surfaces ? static_cast<float>(closure * sum[c] / surfaces) : 0.0f;
-  return miss;
-}
-
-}  // namespace
-
 Image Pipeline::indirect_light(const GBuffer& g) const {
   const GiSettings& s = impl_->settings;
   const Plan& plan = impl_->plan;
   const Image reflected = detail::reflected_radiance(g, plan.gather_emission);
-  const double closure = closure_weight(g, s.miss);
+  const double closure = detail::closure_weight(g, s.miss);
   Image indirect;
-  if (!plan.cache_hits) {
+  if (s.tracer == Tracer::kReference) {
+    const detail::RayHits hits = detail::trace_reference(g, s, impl_->env);
+    indirect = detail::gather_bounces(g, hits, reflected, s.bounces, closure);
+  } else if (!plan.cache_hits) {
     indirect = detail::march_and_gather(g, s, impl_->env, reflected,
-                                        miss_light(g, reflected, closure));
+                                        detail::miss_light(g, reflected, closure));
   } else {
-    // Each further bounce re-gathers over the same rays: the light a surface reflects after
-    // bounce b is its direct light plus albedo x indirect of bounce b.
     const detail::RayHits hits = detail::march_screen_space(g, s, impl_->env);
-    indirect = detail::gather_indirect(g, hits, reflected, miss_light(g, reflected, closure));
-    for (int b = 1; b < s.bounces; ++b) {
-      Image radiance = reflected;
-      for (int c = 0; c < 3; ++c) {
-        float* r = radiance.plane(c);
-        const float* a = g.albedo.plane(c);
-        const float* ind = indirect.plane(c);
-        // Albedo above 1 would add energy at every bounce.
-        for (std::size_t p = 0; p < radiance.plane_size(); ++p)
-          r[p] += std::clamp(a[p], 0.0f, 1.0f) * ind[p];
-      }
-      indirect = detail::gather_indirect(g, hits, radiance, miss_light(g, radiance, closure));
-    }
+    indirect = detail::gather_bounces(g, hits, reflected, s.bounces, closure);
   }
   if (plan.denoise)
     indirect = detail::denoise_pyramid(indirect, g.depth, g.normal, s.denoise_settings);

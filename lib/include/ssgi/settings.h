@@ -45,8 +45,13 @@ struct DenoiseSettings {
   int upsample_blur_radius = 1;
 };
 
+// Who traces the hemisphere rays: the screen-space march (ssgi run) or Embree against the
+// depth buffer's mesh (ssgi reference).
+enum class Tracer { kScreenSpace, kReference };
+
 // Everything that decides the GI result of a frame.
 struct GiSettings {
+  Tracer tracer = Tracer::kScreenSpace;
   int rays = 8;           // hemisphere rays per pixel and bounce
   int max_steps = 64;     // march samples per ray at most
   // Longest ray, in camera-space scene units; 0: until the ray leaves the screen.
