@@ -23,6 +23,7 @@ struct Tracer {
   const GiSettings& settings;
   const Environment& env;
   SurfaceModel model;
+  DepthMesh mesh;
   int width, height;
   int offset_x, offset_y;  // data window origin in display-window pixels
   double cam_to_world[3][3];
@@ -33,6 +34,7 @@ struct Tracer {
         settings(s),
         env(e),
         model{static_cast<float>(s.thickness)},
+        mesh(gb.depth, model),
         width(gb.width()),
         height(gb.height()),
         offset_x(gb.data_window.x0 - gb.display_window.x0),
@@ -53,9 +55,10 @@ struct Tracer {
   }
 
   // Marches one ray from camera-space origin `o` along unit `d`; returns the index of the
-  // pixel it hits or -1. The ray is projected to the screen and sampled at up to max_steps
-  // evenly spaced, jittered points; depth along it is interpolated perspective-correctly
-  // (1/z is linear in screen space, McGuire & Mara 2014).
+  // pixel whose light it brings, or -1. The ray is projected to the screen and sampled at up to
+  // max_steps evenly spaced, jittered points (one per pixel along the major axis when steps
+  // allow); its depth is interpolated perspective-correctly (1/z is linear in screen space,
+  // McGuire & Mara 2014) and tested against the mesh of surface_model.h.
   int march_ray(const Vec3f& o, const Vec3f& d, float jitter, int self_x, int self_y) const {
     float t_end = settings.max_distance > 0 ? static_cast<float>(settings.max_distance)
                                             : kFarFactor * o.z;
@@ -96,20 +99,30 @@ struct Tracer {
     const int steps = static_cast<int>(
         std::clamp(std::ceil(length_px), 1.0f, static_cast<float>(settings.max_steps)));
     const float df = span / steps;
+    const float inf = std::numeric_limits<float>::infinity();
+    // The previous sample, for rays that cross a surface's front between two samples.
+    bool prev_valid = false, prev_in_front = false;
+    float prev_z = 0.0f;
     for (int i = 0; i < steps; ++i) {
       const float f = f_lo + df * (i + jitter);
-      const int ix = static_cast<int>(std::floor(sx0 + dx * f));
-      const int iy = static_cast<int>(std::floor(sy0 + dy * f));
-      if (ix < 0 || iy < 0 || ix >= width || iy >= height) break;
-      if (ix == self_x && iy == self_y) continue;
-      const float zs = g.depth.at(0, ix, iy);
-      if (!std::isfinite(zs)) continue;
-      // Depths the ray spans around this sample: half a step either side.
-      const float fa = std::max(f_lo, f - 0.5f * df), fb = std::min(f_hi, f + 0.5f * df);
-      const float ha = h0 + (h1 - h0) * fa, hb = h0 + (h1 - h0) * fb;
-      const float inf = std::numeric_limits<float>::infinity();
-      const float za = ha > 0 ? 1.0f / ha : inf, zb = hb > 0 ? 1.0f / hb : inf;
-      if (model.hits(zs, std::min(za, zb), std::max(za, zb))) return iy * width + ix;
+      const float sx = sx0 + dx * f, sy = sy0 + dy * f;
+      if (static_cast<int>(std::floor(sx)) == self_x && static_cast<int>(std::floor(sy)) == self_y)
+        continue;
+      MeshPoint surface;
+      if (!mesh.surface_at(sx, sy, &surface)) {
+        prev_valid = false;
+        continue;
+      }
+      const float hr = h0 + (h1 - h0) * f;
+      const float z_ray = hr > 0 ? 1.0f / hr : inf;
+      const bool behind_front = z_ray >= surface.z;
+      // Inside the slab, or through the front of one continuous surface since the last sample.
+      if (behind_front && (z_ray <= model.slab_back(surface.z) ||
+                           (prev_valid && prev_in_front && model.connected(prev_z, surface.z))))
+        return surface.pixel;
+      prev_valid = true;
+      prev_in_front = !behind_front;
+      prev_z = surface.z;
     }
     if (leaves_screen && settings.miss == MissMode::kExtend)
       return extend_edge(o, d, sx0 + dx * f_hi, sy0 + dy * f_hi);
