@@ -14,6 +14,9 @@
 #pragma once
 
 #include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
 
 #include "ssgi/image.h"
 
@@ -38,10 +41,11 @@ struct MeshPoint {
   int pixel;  // index (y * width + x) of the vertex whose light a hit here brings
 };
 
-// The depth buffer seen as the mesh above.
+// The depth buffer seen as the mesh above. Built once per frame: inverse depths and which
+// triangles exist are precomputed, so a lookup is four loads and a few multiplies.
 class DepthMesh {
  public:
-  DepthMesh(const Image& depth, const SurfaceModel& model) : depth_(depth), model_(model) {}
+  DepthMesh(const Image& depth, const SurfaceModel& model);
 
   // The surface at continuous data-window pixel coordinates (sx, sy) (pixel (x, y) has its
   // centre at (x + 0.5, y + 0.5)); false where no triangle covers the point.
@@ -49,34 +53,30 @@ class DepthMesh {
     const float u = sx - 0.5f, v = sy - 0.5f;
     const float fi = std::floor(u), fj = std::floor(v);
     const int i = static_cast<int>(fi), j = static_cast<int>(fj);
-    if (i < 0 || j < 0 || i + 1 >= depth_.width() || j + 1 >= depth_.height()) return false;
+    if (i < 0 || j < 0 || i + 1 >= width_ || j + 1 >= height_) return false;
     const float fu = u - fi, fv = v - fj;
     // Triangle (i,j) (i+1,j) (i+1,j+1) above the diagonal, (i,j) (i,j+1) (i+1,j+1) below.
     const bool upper = fu >= fv;
+    const std::size_t quad = static_cast<std::size_t>(j) * width_ + i;
+    if (!(triangles_[quad] & (upper ? kUpper : kLower))) return false;
     const int xb = upper ? i + 1 : i, yb = upper ? j : j + 1;
-    const float za = depth_.at(0, i, j), zb = depth_.at(0, xb, yb),
-                zc = depth_.at(0, i + 1, j + 1);
-    if (!model_.connected(za, zb) || !model_.connected(zb, zc) || !model_.connected(za, zc))
-      return false;
+    const int a = j * width_ + i, b = yb * width_ + xb, c = a + width_ + 1;
     const float wa = upper ? 1.0f - fu : 1.0f - fv;
     const float wb = upper ? fu - fv : fv - fu;
     const float wc = upper ? fv : fu;
-    out->z = 1.0f / (wa / za + wb / zb + wc / zc);
-    const int w = depth_.width();
-    if (wa >= wb && wa >= wc)
-      out->pixel = j * w + i;
-    else if (wb >= wc)
-      out->pixel = yb * w + xb;
-    else
-      out->pixel = (j + 1) * w + i + 1;
+    out->z = 1.0f / (wa * inverse_depth_[a] + wb * inverse_depth_[b] + wc * inverse_depth_[c]);
+    out->pixel = (wa >= wb && wa >= wc) ? a : (wb >= wc ? b : c);
     return true;
   }
 
   const SurfaceModel& model() const { return model_; }
 
  private:
-  const Image& depth_;
+  static constexpr std::uint8_t kUpper = 1, kLower = 2;
+  int width_, height_;
   SurfaceModel model_;
+  std::vector<float> inverse_depth_;     // 1/z per pixel
+  std::vector<std::uint8_t> triangles_;  // per quad (top-left pixel index): kUpper | kLower
 };
 
 }  // namespace ssgi::detail
