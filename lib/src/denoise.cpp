@@ -362,7 +362,20 @@ Image bilateral_upsample(const Image& coarse_light, const Image& coarse_guides, 
   return out;
 }
 
-void check_settings(const DenoiseSettings& s) {
+
+void check_shapes(const Image& noisy, const Image& depth, const Image& normal) {
+  const bool same_size = depth.width() == noisy.width() && depth.height() == noisy.height() &&
+                         normal.width() == noisy.width() && normal.height() == noisy.height();
+  if (noisy.channels() != 3 || depth.channels() != 1 || normal.channels() != 3 || !same_size) {
+    throw Error(ErrorKind::kInternal, {},
+                "denoise: expected 3-channel light, 1-channel depth and 3-channel normal of "
+                "one size");
+  }
+}
+
+}  // namespace
+
+void validate_denoise_settings(const DenoiseSettings& s) {
   auto fail = [](const std::string& what, double value) {
     throw_usage("denoise: " + what + " (got " + std::to_string(value) + ")");
   };
@@ -377,21 +390,9 @@ void check_settings(const DenoiseSettings& s) {
     fail("normal_power must be >= 0", s.normal_power);
 }
 
-void check_shapes(const Image& noisy, const Image& depth, const Image& normal) {
-  const bool same_size = depth.width() == noisy.width() && depth.height() == noisy.height() &&
-                         normal.width() == noisy.width() && normal.height() == noisy.height();
-  if (noisy.channels() != 3 || depth.channels() != 1 || normal.channels() != 3 || !same_size) {
-    throw Error(ErrorKind::kInternal, {},
-                "denoise: expected 3-channel light, 1-channel depth and 3-channel normal of "
-                "one size");
-  }
-}
-
-}  // namespace
-
 Image denoise_pyramid(const Image& noisy, const Image& depth, const Image& normal,
                       const DenoiseSettings& settings) {
-  check_settings(settings);
+  validate_denoise_settings(settings);
   check_shapes(noisy, depth, normal);
   if (noisy.width() == 0 || noisy.height() == 0) return Image(noisy.width(), noisy.height(), 3);
   const RangeTerms terms = make_range_terms(settings);

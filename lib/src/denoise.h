@@ -6,6 +6,9 @@
 
 namespace ssgi::detail {
 
+// Throws Error(kUsage) naming the first setting out of range.
+void validate_denoise_settings(const DenoiseSettings& settings);
+
 // Denoises the indirect light `noisy` (3 channels) guided by `depth` (1 channel, planar camera
 // z, +inf where there is no surface) and `normal` (3 channels, unit camera-space normals):
 // downsample `settings.levels` times with the guides, joint bilateral filter at the coarsest

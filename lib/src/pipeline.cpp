@@ -37,6 +37,21 @@ void validate(const GiSettings& s) {
   for (float c : s.env_color)
     if (!(c >= 0) || !std::isfinite(c)) throw_usage("--env-color must be finite and >= 0");
   if (s.env_up != 'y' && s.env_up != 'z') throw_usage("--env-up must be y or z");
+  detail::validate_denoise_settings(s.denoise_settings);
+}
+
+const char* miss_mode_name(MissMode mode) {
+  switch (mode) {
+    case MissMode::kEnvironment:
+      return "env";
+    case MissMode::kFrame:
+      return "frame";
+    case MissMode::kExtend:
+      return "extend";
+    case MissMode::kAuto:
+      return "auto";
+  }
+  return "?";
 }
 
 }  // namespace
@@ -74,10 +89,24 @@ Plan make_plan(const SequenceInfo& seq, const GiSettings& s) {
   const std::string env =
       plan.env_map ? "environment map " + s.env_map + " (up axis " + s.env_up + ")"
                    : "constant colour " + color_string(s.env_color);
-  plan.reasons.push_back(s.miss == MissMode::kFrame
-                             ? "misses: estimated from the frame (mean reflected light of its "
-                               "surfaces, and " + env + " for its background fraction)"
-                             : "misses: " + env);
+  std::string misses = std::string("misses (--miss ") + miss_mode_name(s.miss) + "): ";
+  switch (s.miss) {
+    case MissMode::kEnvironment:
+      misses += env;
+      break;
+    case MissMode::kFrame:
+      misses += "the mean light the frame's surfaces reflect, and " + env +
+                " for the frame's background fraction";
+      break;
+    case MissMode::kExtend:
+      misses += "the surface at the screen edge extended as its plane, else " + env;
+      break;
+    case MissMode::kAuto:
+      misses += "per frame, the frame estimate when its border shows an enclosure (score "
+                "above 0.6), " + env + " when it does not (below 0.4), blended between";
+      break;
+  }
+  plan.reasons.push_back(misses);
   plan.cache_hits = s.bounces > 1;
   plan.reasons.push_back(
       "march: " + std::to_string(s.rays) + " rays per pixel, up to " +
