@@ -1,9 +1,12 @@
 // The GI pipeline on scenes with known answers (testdata/README.md describes each fixture).
+#include <OpenImageIO/imageio.h>
 #include <tbb/global_control.h>
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <string>
+#include <vector>
 
 #include "gtest/gtest.h"
 #include "ssgi/io.h"
@@ -187,6 +190,53 @@ TEST(Pipeline, CropKeepsTheSameNoise) {
       ++compared;
     }
   EXPECT_GT(compared, 1000);
+}
+
+// Writes a 2:1 lat-long map that is `upper` above the horizon (OpenEXR's +Y up) and `lower`
+// below it.
+std::string write_two_tone_env(const std::string& name, float upper, float lower) {
+  const int w = 64, h = 32;
+  std::vector<float> pixels(static_cast<std::size_t>(w) * h * 3);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < 3; ++c) pixels[(static_cast<std::size_t>(y) * w + x) * 3 + c] =
+          y < h / 2 ? upper : lower;
+  const std::string path =
+      (std::filesystem::temp_directory_path() / ("ssgi_pipeline_test_" + name + ".exr")).string();
+  auto out = OIIO::ImageOutput::create(path);
+  OIIO::ImageSpec spec(w, h, 3, OIIO::TypeDesc::FLOAT);
+  EXPECT_TRUE(out && out->open(path, spec) &&
+              out->write_image(OIIO::TypeDesc::FLOAT, pixels.data()) && out->close());
+  return path;
+}
+
+// The lone plane (world +Z up, Blender's convention) under a map bright above OpenEXR's
+// horizon: with --env-up z the plane's hemisphere is the bright half, so indirect = 1; with the
+// map's own +Y up, world +Z is horizontal in the map, half the cosine-weighted hemisphere is
+// bright, so indirect = 0.5 up to the sampling noise, which the denoiser averages down.
+TEST(Pipeline, EnvironmentMapFollowsItsUpAxis) {
+  const std::string env = write_two_tone_env("two_tone", 1.0f, 0.0f);
+  GiSettings s;
+  s.miss = MissMode::kEnvironment;
+  s.env_map = env;
+  s.rays = 64;
+  s.bounces = 1;
+  const Frame f = load("plane/plane.0001.exr", s);
+  for (char up : {'z', 'y'}) {
+    s.env_up = up;
+    const FrameResult r = run(f, s);
+    double sum = 0;
+    int n = 0;
+    for (int y = 0; y < f.g.height(); ++y)
+      for (int x = 0; x < f.g.width(); ++x)
+        if (f.g.is_surface(x, y)) {
+          sum += r.indirect.at(0, x, y);
+          ++n;
+        }
+    ASSERT_GT(n, 0);
+    EXPECT_NEAR(sum / n, up == 'z' ? 1.0 : 0.5, up == 'z' ? 0.01 : 0.03) << "up " << up;
+  }
+  std::filesystem::remove(env);
 }
 
 }  // namespace
