@@ -108,8 +108,17 @@ std::string parse_compression(const std::string& spec) {
   return spec;
 }
 
+void check_output_directory(const std::string& path) {
+  const fs::path dir = fs::absolute(path).parent_path();
+  std::error_code ec;
+  if (fs::is_directory(dir, ec)) return;
+  throw_io(path, "output directory " + dir.string() +
+                     (fs::exists(dir, ec) ? " is not a directory" : " does not exist"));
+}
+
 void write_frame(const std::string& path, const GBuffer& frame,
                  const std::vector<OutputLayer>& layers, const WriteOptions& options) {
+  check_output_directory(path);
   const Box2i& data = frame.data_window;
   const std::size_t pixels = static_cast<std::size_t>(data.width()) * data.height();
   const OIIO::TypeDesc our_format = options.half ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT;
@@ -181,8 +190,6 @@ void write_frame(const std::string& path, const GBuffer& frame,
 
   const fs::path target = fs::absolute(path);
   std::error_code ec;
-  if (!fs::is_directory(target.parent_path(), ec))
-    throw_io(path, "output directory " + target.parent_path().string() + " does not exist");
   const std::string tmp = temp_path_for(target);
   auto out = OIIO::ImageOutput::create(tmp);
   bool ok = out && out->open(tmp, spec) &&
@@ -195,8 +202,9 @@ void write_frame(const std::string& path, const GBuffer& frame,
   }
   fs::rename(tmp, target, ec);
   if (ec) {
+    const std::string why = ec.message();  // before remove() overwrites ec
     fs::remove(tmp, ec);
-    throw_io(path, "cannot move the finished frame into place: " + ec.message());
+    throw_io(path, "cannot move the finished frame into place: " + why);
   }
 }
 

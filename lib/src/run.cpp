@@ -28,9 +28,11 @@ void check_outputs(const SequenceInfo& seq, const SequencePattern& out,
   for (int f : seq.frames) {
     for (int g : seq.frames_on_disk) {
       if (same_file(out.path_for(f), seq.pattern.path_for(g)))
-        throw_usage("output " + out.path_for(f) + " would overwrite input frame " +
-                    std::to_string(g));
+        throw Error(ErrorKind::kUsage, out.path_for(f),
+                    "output would overwrite input frame " + std::to_string(g));
     }
+    // Fail before any frame is computed, with one line, rather than once per frame.
+    check_output_directory(out.path_for(f));
   }
 }
 

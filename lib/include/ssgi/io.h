@@ -82,6 +82,9 @@ struct WriteOptions {
 // returns OIIO's spelling. Throws Error(kUsage) otherwise.
 std::string parse_compression(const std::string& spec);
 
+// Throws Error(kIO) naming `path` unless the directory `path` would be written into exists.
+void check_output_directory(const std::string& path);
+
 // Writes `layers` (covering `frame`'s data window) to `path` with the input's header and,
 // when asked, its channels. Written to a temporary file in the same directory, then renamed,
 // so a failure never leaves a partial frame. Throws Error(kIO) naming `path` on failure.

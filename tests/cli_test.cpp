@@ -1,0 +1,684 @@
+// End-to-end tests of the `ssgi` command line: the built binary on the committed fixtures, its
+// exit codes, its one-line errors, and the files it writes (or does not write).
+#include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+#include <poll.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+extern char** environ;
+
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kTestdata = SSGI_TESTDATA_DIR;
+
+std::string testdata(const std::string& relative) { return kTestdata + "/" + relative; }
+
+// What a finished `ssgi` process left: its exit code and both streams.
+struct CliResult {
+  int exit_code = -1;
+  std::string out, err;
+
+  std::vector<std::string> err_lines() const {
+    std::vector<std::string> lines;
+    std::istringstream in(err);
+    for (std::string line; std::getline(in, line);) lines.push_back(line);
+    return lines;
+  }
+};
+
+// Runs the built binary with `args` (no shell), capturing stdout and stderr through pipes that
+// are drained together so that neither can fill up and block the child.
+CliResult run_ssgi(const std::vector<std::string>& args) {
+  std::vector<std::string> argv_storage = {SSGI_BINARY};
+  argv_storage.insert(argv_storage.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (std::string& a : argv_storage) argv.push_back(a.data());
+  argv.push_back(nullptr);
+
+  int out_pipe[2], err_pipe[2];
+  if (::pipe(out_pipe) != 0 || ::pipe(err_pipe) != 0) return {};
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_adddup2(&actions, out_pipe[1], STDOUT_FILENO);
+  posix_spawn_file_actions_adddup2(&actions, err_pipe[1], STDERR_FILENO);
+  for (int fd : {out_pipe[0], out_pipe[1], err_pipe[0], err_pipe[1]})
+    posix_spawn_file_actions_addclose(&actions, fd);
+  pid_t pid = 0;
+  const int spawned = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  ::close(out_pipe[1]);
+  ::close(err_pipe[1]);
+
+  CliResult result;
+  pollfd fds[2] = {{out_pipe[0], POLLIN, 0}, {err_pipe[0], POLLIN, 0}};
+  std::string* sinks[2] = {&result.out, &result.err};
+  int open_fds = 2;
+  while (spawned == 0 && open_fds > 0) {
+    if (::poll(fds, 2, -1) < 0) break;
+    for (int i = 0; i < 2; ++i) {
+      if (fds[i].fd < 0 || !(fds[i].revents & (POLLIN | POLLHUP | POLLERR))) continue;
+      char buf[4096];
+      const ssize_t got = ::read(fds[i].fd, buf, sizeof buf);
+      if (got > 0) {
+        sinks[i]->append(buf, static_cast<std::size_t>(got));
+      } else {
+        ::close(fds[i].fd);
+        fds[i].fd = -1;
+        --open_fds;
+      }
+    }
+  }
+  for (const pollfd& p : fds)
+    if (p.fd >= 0) ::close(p.fd);
+  int status = 0;
+  if (spawned == 0 && ::waitpid(pid, &status, 0) == pid && WIFEXITED(status))
+    result.exit_code = WEXITSTATUS(status);
+  return result;
+}
+
+// An EXR's first subimage: its header and every channel as a float plane.
+struct ExrImage {
+  OIIO::ImageSpec spec;
+  std::map<std::string, std::vector<float>> planes;
+
+  std::set<std::string> channel_names() const {
+    return {spec.channelnames.begin(), spec.channelnames.end()};
+  }
+  OIIO::TypeDesc format_of(const std::string& channel) const {
+    const auto it = std::find(spec.channelnames.begin(), spec.channelnames.end(), channel);
+    return spec.channelformat(static_cast<int>(it - spec.channelnames.begin()));
+  }
+};
+
+ExrImage read_exr(const std::string& path) {
+  ExrImage image;
+  auto in = OIIO::ImageInput::open(path);
+  EXPECT_TRUE(in) << path << ": " << OIIO::geterror();
+  if (!in) return image;
+  image.spec = in->spec();
+  const int n = image.spec.nchannels;
+  const std::size_t pixels = static_cast<std::size_t>(image.spec.width) * image.spec.height;
+  std::vector<float> interleaved(pixels * n);
+  EXPECT_TRUE(in->read_image(0, 0, 0, n, OIIO::TypeDesc::FLOAT, interleaved.data()))
+      << path << ": " << in->geterror();
+  for (int c = 0; c < n; ++c) {
+    std::vector<float>& plane = image.planes[image.spec.channelnames[c]];
+    plane.resize(pixels);
+    for (std::size_t p = 0; p < pixels; ++p) plane[p] = interleaved[p * n + c];
+  }
+  return image;
+}
+
+// Writes `image` (all channels float) to `path`.
+void write_exr(const std::string& path, const ExrImage& image) {
+  OIIO::ImageSpec spec = image.spec;
+  spec.set_format(OIIO::TypeDesc::FLOAT);
+  spec.channelformats.clear();
+  spec.alpha_channel = -1;
+  spec.z_channel = -1;
+  spec.nchannels = static_cast<int>(spec.channelnames.size());
+  const std::size_t pixels = static_cast<std::size_t>(spec.width) * spec.height;
+  std::vector<float> interleaved(pixels * spec.nchannels);
+  for (int c = 0; c < spec.nchannels; ++c) {
+    const std::vector<float>& plane = image.planes.at(spec.channelnames[c]);
+    for (std::size_t p = 0; p < pixels; ++p) interleaved[p * spec.nchannels + c] = plane[p];
+  }
+  auto out = OIIO::ImageOutput::create(path);
+  ASSERT_TRUE(out && out->open(path, spec) &&
+              out->write_image(OIIO::TypeDesc::FLOAT, interleaved.data()) && out->close())
+      << path;
+}
+
+std::string file_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+const std::vector<std::string> kOurChannels = {
+    "R", "G", "B", "A", "indirect.R", "indirect.G", "indirect.B", "gi.R", "gi.G", "gi.B"};
+
+// custom/ holds the sample under names no preset knows.
+const std::vector<std::string> kCustomChannelFlags = {
+    "--channel", "depth=dist",   "--channel", "normal=nrm",    "--channel", "albedo=base",
+    "--channel", "direct=light", "--channel", "emission=glow", "--channel", "beauty=beauty"};
+
+// Every fixture sequence: the pattern under testdata/ and extra flags it needs.
+struct Fixture {
+  std::string pattern;
+  std::vector<std::string> flags;
+};
+
+const std::vector<Fixture> kSceneFixtures = {
+    {"sample/sample.####.exr", {}},
+    {"static/static.####.exr", {"--frames", "1-3"}},
+    {"pan/pan.####.exr", {"--frames", "1-3"}},
+    {"moving/moving.####.exr", {"--frames", "1-3"}},
+    {"furnace/furnace.0001.exr", {}},
+    {"plane/plane.0001.exr", {}},
+    {"symmetric/symmetric.0001.exr", {}},
+    {"overscan/overscan.0001.exr", {}},
+    {"crop/crop.0001.exr", {}},
+    {"custom/custom.0001.exr", kCustomChannelFlags},
+    {"bad/nan.0001.exr", {}},
+};
+
+class Cli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() /
+           (std::string("ssgi_cli_test_") + info->name() + "_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+
+  // The names in the test directory, hidden ones (temporary files) included.
+  std::set<std::string> entries() const {
+    std::set<std::string> names;
+    for (const auto& e : fs::directory_iterator(dir_)) names.insert(e.path().filename().string());
+    return names;
+  }
+
+  // Asserts a failure reported as exactly the one line `ssgi: error: <file>: <what>`, with
+  // `what` containing `phrase`.
+  static void expect_one_error(const CliResult& r, const std::string& file,
+                               const std::string& phrase) {
+    const std::vector<std::string> lines = r.err_lines();
+    ASSERT_EQ(lines.size(), 1u) << r.err;
+    const std::string head = "ssgi: error: " + file + ": ";
+    EXPECT_EQ(lines[0].rfind(head, 0), 0u) << lines[0];
+    EXPECT_NE(lines[0].find(phrase, head.size()), std::string::npos) << lines[0];
+  }
+
+  // Asserts a usage error: the error line and the hint, nothing else.
+  static void expect_usage_error(const CliResult& r, const std::string& subcommand,
+                                 const std::string& what) {
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_EQ(r.err, "ssgi: error: " + what + "\nTry 'ssgi " + subcommand + " --help'.\n");
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(Cli, VersionAndHelpExitZero) {
+  // --version prints one line on stdout.
+  CliResult r = run_ssgi({"--version"});
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_EQ(r.out.rfind("ssgi ", 0), 0u);
+  EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1);
+  EXPECT_EQ(r.err, "");
+  // Help goes to stdout (it was asked for), for the tool and each subcommand.
+  const std::vector<std::pair<std::vector<std::string>, std::string>> helps = {
+      {{"--help"}, "usage: ssgi <subcommand>"},
+      {{"run", "--help"}, "usage: ssgi run INPUT -o OUTPUT"},
+      {{"info", "--help"}, "usage: ssgi info INPUT"},
+  };
+  for (const auto& [args, head] : helps) {
+    r = run_ssgi(args);
+    EXPECT_EQ(r.exit_code, 0) << args.back();
+    EXPECT_EQ(r.out.rfind(head, 0), 0u) << r.out;
+    EXPECT_EQ(r.err, "");
+  }
+}
+
+TEST_F(Cli, UsageErrorsExitTwoAndWriteNothing) {
+  const std::string in = testdata("sample/sample.####.exr");
+  const std::string out = path("out.####.exr");
+  // No arguments at all: usage on stderr.
+  CliResult r = run_ssgi({});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.out, "");
+  EXPECT_EQ(r.err.rfind("usage: ssgi", 0), 0u);
+  // An unknown subcommand is named, then the usage.
+  r = run_ssgi({"render", in});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.err.rfind("ssgi: error: unknown subcommand 'render'\nusage: ssgi", 0), 0u);
+  expect_usage_error(run_ssgi({"run", in, "-o", out, "--bogus"}), "run",
+                     "unknown option '--bogus'");
+  expect_usage_error(run_ssgi({"run", in}), "run", "no output given (-o PATTERN)");
+  expect_usage_error(run_ssgi({"run", "-o", out}), "run", "no input sequence given");
+  expect_usage_error(run_ssgi({"run", in, "-o", out, "--rays"}), "run",
+                     "option '--rays' needs a value");
+  expect_usage_error(run_ssgi({"run", in, "-o", out, "--rays", "0"}), "run",
+                     "--rays: '0' is not an integer in [1, 4096]");
+  expect_usage_error(run_ssgi({"info", in, "--datatype", "double"}), "info",
+                     "--datatype must be half or float");
+  // Several frames cannot go to one file name.
+  expect_usage_error(run_ssgi({"run", in, "-o", path("out.exr")}), "run",
+                     "output '" + path("out.exr") +
+                         "' has no frame field (e.g. ####) but 6 frames are to be written");
+  EXPECT_TRUE(entries().empty());
+}
+
+TEST_F(Cli, InfoReportsTheSampleSequence) {
+  const CliResult r = run_ssgi({"info", testdata("sample/sample.####.exr")});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  // The facts a user checks before a run: layout, size, frames, cameras and the plan.
+  EXPECT_NE(r.out.find("\nlayout:        blender (Blender Cycles"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\nresolution:    96x64\n"), std::string::npos);
+  EXPECT_NE(r.out.find("\ndisplay window (0,0)-(95,63)\n"), std::string::npos);
+  EXPECT_NE(r.out.find("\nframes:        1-6 (6 to write, 6 on disk)\n"), std::string::npos);
+  EXPECT_NE(r.out.find("  depth        ViewLayer.Depth.Z\n"), std::string::npos);
+  // The sample's camera has a 65 degree horizontal field of view in every frame's header.
+  for (int f = 1; f <= 6; ++f) {
+    const std::string line = "  frame " + std::to_string(f) +
+                             "      header worldToCamera/worldToNDC, horizontal fov 65.0000 deg\n";
+    EXPECT_NE(r.out.find(line), std::string::npos) << line;
+  }
+  const std::size_t plan = r.out.find("\nplan:\n");
+  ASSERT_NE(plan, std::string::npos);
+  EXPECT_NE(r.out.find("  march: ", plan), std::string::npos);
+  EXPECT_NE(r.out.find("  composite: ", plan), std::string::npos);
+}
+
+TEST_F(Cli, InfoDetectsEveryLayoutPreset) {
+  // The layout fixtures carry no camera, hence --fov. Nuke's and Unreal's passes include no
+  // direct light, so their plan cannot be made without --channel direct=: detected, then exit 3.
+  const std::vector<std::pair<std::string, int>> presets = {
+      {"arnold", 0},   {"blender", 0},   {"karma", 0},  {"nuke", 3},
+      {"redshift", 0}, {"renderman", 0}, {"unreal", 3}, {"vray", 0},
+  };
+  for (const auto& [preset, exit_code] : presets) {
+    const std::string file = testdata("layouts/" + preset + ".exr");
+    const CliResult r = run_ssgi({"info", file, "--fov", "60"});
+    EXPECT_EQ(r.exit_code, exit_code) << preset << ": " << r.err;
+    EXPECT_NE(r.out.find("\nlayout:        " + preset + " ("), std::string::npos) << preset << ":\n"
+                                                                                  << r.out;
+    if (exit_code == 0)
+      EXPECT_EQ(r.err, "") << preset;
+    else
+      expect_one_error(r, file, "has no direct-light channels");
+  }
+}
+
+TEST_F(Cli, ArbitraryChannelNamesWorkWithChannelFlags) {
+  const std::string file = testdata("custom/custom.0001.exr");
+  // No preset knows these names: exit 3, naming the file and the missing role.
+  CliResult r = run_ssgi({"info", file});
+  EXPECT_EQ(r.exit_code, 3);
+  expect_one_error(r, file, "no channel layout preset matches: no depth channel");
+  // Named one by one, every role is found and the file runs.
+  std::vector<std::string> args = {"info", file};
+  args.insert(args.end(), kCustomChannelFlags.begin(), kCustomChannelFlags.end());
+  r = run_ssgi(args);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("\nlayout:        custom ("), std::string::npos);
+  EXPECT_NE(r.out.find("  depth        dist\n"), std::string::npos);
+  EXPECT_NE(r.out.find("  normal       nrm.x, nrm.y, nrm.z\n"), std::string::npos);
+  EXPECT_NE(r.out.find("  albedo       base.r, base.g, base.b\n"), std::string::npos);
+  args[0] = "run";
+  args.insert(args.end(), {"-o", path("custom.####.exr"), "--rays", "2", "-q"});
+  r = run_ssgi(args);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(entries(), std::set<std::string>{"custom.0001.exr"});
+}
+
+TEST_F(Cli, RunWritesOurLayersInputChannelsAndMetadata) {
+  const CliResult r = run_ssgi({"run", testdata("sample/sample.####.exr"), "-o",
+                                path("out.####.exr"), "--rays", "2", "--seed", "7"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // Not a terminal: one progress line per frame, nothing else.
+  EXPECT_EQ(r.err_lines().size(), 6u) << r.err;
+  EXPECT_EQ(r.err_lines()[0].rfind("ssgi: frame 1 (1/6): ", 0), 0u);
+  EXPECT_EQ(entries(), (std::set<std::string>{"out.0001.exr", "out.0002.exr", "out.0003.exr",
+                                              "out.0004.exr", "out.0005.exr", "out.0006.exr"}));
+  for (int f = 1; f <= 6; ++f) {
+    const std::string name = "sample.000" + std::to_string(f) + ".exr";
+    const ExrImage in = read_exr(testdata("sample/" + name));
+    const ExrImage out = read_exr(path("out.000" + std::to_string(f) + ".exr"));
+    // Ours plus every input channel, the latter with unchanged pixels.
+    std::set<std::string> expected = in.channel_names();
+    expected.insert(kOurChannels.begin(), kOurChannels.end());
+    EXPECT_EQ(out.channel_names(), expected);
+    for (const auto& [channel, plane] : in.planes)
+      EXPECT_EQ(out.planes.at(channel), plane) << channel;
+    for (const std::string& c : kOurChannels)
+      EXPECT_EQ(out.format_of(c), OIIO::TypeDesc::FLOAT) << c;
+    // Cameras and Blender's attributes kept; provenance added.
+    for (const char* attr : {"worldToCamera", "worldToNDC", "BlenderMultiChannel", "Frame"}) {
+      const OIIO::ParamValue* a = in.spec.find_attribute(attr);
+      const OIIO::ParamValue* b = out.spec.find_attribute(attr);
+      ASSERT_TRUE(a && b) << attr;
+      EXPECT_EQ(a->type(), b->type()) << attr;
+      EXPECT_EQ(std::memcmp(a->data(), b->data(), a->type().size()), 0) << attr;
+    }
+    EXPECT_EQ(out.spec.get_string_attribute("ssgi:seed"), "7");
+    EXPECT_FALSE(out.spec.get_string_attribute("ssgi:version").empty());
+    // As std::string: OIIO 2.4's string_view::rfind(s, 0) never matches at 0.
+    const std::string command_line = out.spec.get_string_attribute("ssgi:commandLine");
+    EXPECT_EQ(command_line.rfind("ssgi run ", 0), 0u) << command_line;
+    EXPECT_EQ(out.spec.get_string_attribute("compression"), "zip");
+  }
+}
+
+TEST_F(Cli, DataAndDisplayWindowsAreKept) {
+  // Overscan (data larger than display), a crop (smaller) and the plain case.
+  for (const std::string name :
+       {"overscan/overscan.0001.exr", "crop/crop.0001.exr", "sample/sample.0001.exr"}) {
+    const std::string out = path("out.exr");
+    const CliResult r = run_ssgi({"run", testdata(name), "-o", out, "--rays", "2", "-q"});
+    ASSERT_EQ(r.exit_code, 0) << name << ": " << r.err;
+    const OIIO::ImageSpec in = read_exr(testdata(name)).spec;
+    const OIIO::ImageSpec got = read_exr(out).spec;
+    EXPECT_EQ(std::vector<int>({got.x, got.y, got.width, got.height}),
+              std::vector<int>({in.x, in.y, in.width, in.height}))
+        << name;
+    EXPECT_EQ(std::vector<int>({got.full_x, got.full_y, got.full_width, got.full_height}),
+              std::vector<int>({in.full_x, in.full_y, in.full_width, in.full_height}))
+        << name;
+  }
+}
+
+TEST_F(Cli, NoPassthroughWritesOnlyOurChannels) {
+  const CliResult r = run_ssgi({"run", testdata("sample/sample.0001.exr"), "-o", path("o.exr"),
+                                "--rays", "2", "-q", "--no-passthrough"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(read_exr(path("o.exr")).channel_names(),
+            std::set<std::string>(kOurChannels.begin(), kOurChannels.end()));
+}
+
+TEST_F(Cli, LayerPrefixMovesOurChannelsOnly) {
+  // With or without the trailing dot, ours go under "ssgi."; the input's stay where they were.
+  for (const std::string prefix : {"ssgi", "ssgi."}) {
+    const CliResult r = run_ssgi({"run", testdata("sample/sample.0001.exr"), "-o", path("o.exr"),
+                                  "--rays", "2", "-q", "--layer-prefix", prefix});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    std::set<std::string> expected = read_exr(testdata("sample/sample.0001.exr")).channel_names();
+    for (const std::string& c : kOurChannels) expected.insert("ssgi." + c);
+    EXPECT_EQ(read_exr(path("o.exr")).channel_names(), expected) << prefix;
+  }
+}
+
+TEST_F(Cli, HalfDatatypeAppliesToOurChannelsOnlyAndClamps) {
+  // The sample with an emission of 1e6 on every pixel: the composite is beyond half's range.
+  ExrImage bright = read_exr(testdata("sample/sample.0001.exr"));
+  std::fill(bright.planes.at("ViewLayer.Emit.R").begin(),
+            bright.planes.at("ViewLayer.Emit.R").end(), 1e6f);
+  write_exr(path("bright.0001.exr"), bright);
+  const CliResult r = run_ssgi({"run", path("bright.0001.exr"), "-o", path("o.exr"), "--rays", "2",
+                                "-q", "--datatype", "half"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const ExrImage out = read_exr(path("o.exr"));
+  for (const std::string& c : out.spec.channelnames) {
+    const bool ours = std::count(kOurChannels.begin(), kOurChannels.end(), c) > 0;
+    EXPECT_EQ(out.format_of(c), ours ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT) << c;
+  }
+  // Clamped to the largest half on surfaces (background pixels show the beauty), never inf.
+  const std::vector<float>& red = out.planes.at("R");
+  EXPECT_EQ(*std::max_element(red.begin(), red.end()), 65504.0f);
+  EXPECT_TRUE(std::all_of(red.begin(), red.end(), [](float v) { return std::isfinite(v); }));
+}
+
+TEST_F(Cli, DwaCompressionWritesAndWarnsOnce) {
+  const CliResult r = run_ssgi({"run", testdata("sample/sample.1-2#.exr"), "-o", path("o.####.exr"),
+                                "--rays", "2", "--compression", "dwaa:45"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // One warning for the run (not per frame), then the two progress lines.
+  const std::vector<std::string> lines = r.err_lines();
+  ASSERT_EQ(lines.size(), 3u) << r.err;
+  EXPECT_EQ(lines[0],
+            "ssgi: warning: DWA compression is lossy on channels named R, G, B "
+            "(ssgi's outputs too)");
+  const ExrImage out = read_exr(path("o.0002.exr"));
+  EXPECT_EQ(out.spec.get_string_attribute("compression"), "dwaa");
+  EXPECT_EQ(out.spec.get_float_attribute("openexr:dwaCompressionLevel"), 45.0f);
+}
+
+TEST_F(Cli, BadCompressionIsAUsageError) {
+  const std::string in = testdata("sample/sample.0001.exr");
+  expect_usage_error(run_ssgi({"run", in, "-o", path("o.exr"), "--compression", "lzma"}), "run",
+                     "unknown --compression 'lzma' (none, rle, zips, zip, piz, pxr24, b44, b44a, "
+                     "dwaa[:level], dwab[:level])");
+  expect_usage_error(run_ssgi({"run", in, "-o", path("o.exr"), "--compression", "zip:3"}), "run",
+                     "--compression 'zip:3': only dwaa and dwab take a level");
+  expect_usage_error(run_ssgi({"run", in, "-o", path("o.exr"), "--compression", "dwaa:x"}), "run",
+                     "--compression 'dwaa:x': the level must be a positive number");
+  EXPECT_TRUE(entries().empty());
+}
+
+TEST_F(Cli, NoNanOrInfInOurChannelsOnAnyFixture) {
+  // bad/nan.0001.exr has NaN and inf in depth, normals, albedo and direct light: sanitised on
+  // reading, it must run like any other file.
+  for (const Fixture& fixture : kSceneFixtures) {
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    std::vector<std::string> args = {
+        "run", testdata(fixture.pattern), "-o", path("o.####.exr"), "--rays", "2", "--threads", "2",
+        "-q"};
+    args.insert(args.end(), fixture.flags.begin(), fixture.flags.end());
+    const CliResult r = run_ssgi(args);
+    ASSERT_EQ(r.exit_code, 0) << fixture.pattern << ": " << r.err;
+    EXPECT_EQ(r.err, "") << fixture.pattern;
+    ASSERT_FALSE(entries().empty());
+    for (const std::string& name : entries()) {
+      const ExrImage out = read_exr(path(name));
+      for (const std::string& c : kOurChannels) {
+        const std::vector<float>& plane = out.planes.at(c);
+        const auto bad =
+            std::find_if(plane.begin(), plane.end(), [](float v) { return !std::isfinite(v); });
+        EXPECT_EQ(bad, plane.end())
+            << fixture.pattern << " " << name << " " << c << " pixel " << (bad - plane.begin());
+      }
+    }
+  }
+}
+
+TEST_F(Cli, OutputBitsDoNotDependOnThreadCountOrRun) {
+  // Default settings (the full pipeline); one thread, two threads, and two threads again.
+  const std::string in = testdata("sample/sample.####.exr");
+  for (const std::string run : {"t1", "t2", "t2again"}) {
+    const CliResult r = run_ssgi(
+        {"run", in, "-o", path(run + ".####.exr"), "--threads", run == "t1" ? "1" : "2", "-q"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  for (int f = 1; f <= 6; ++f) {
+    const std::string frame = ".000" + std::to_string(f) + ".exr";
+    const ExrImage t1 = read_exr(path("t1" + frame));
+    const ExrImage t2 = read_exr(path("t2" + frame));
+    const ExrImage again = read_exr(path("t2again" + frame));
+    for (const std::string& c : kOurChannels) {
+      const std::vector<float>& a = t1.planes.at(c);
+      ASSERT_EQ(t2.planes.at(c).size(), a.size());
+      // Bit for bit (memcmp, not ==): also the same signed zeros.
+      EXPECT_EQ(std::memcmp(a.data(), t2.planes.at(c).data(), a.size() * sizeof(float)), 0)
+          << "1 vs 2 threads, frame " << f << " " << c;
+      EXPECT_EQ(
+          std::memcmp(t2.planes.at(c).data(), again.planes.at(c).data(), a.size() * sizeof(float)),
+          0)
+          << "run to run, frame " << f << " " << c;
+    }
+  }
+}
+
+TEST_F(Cli, FramesOptionAndRangeInNameSelectFramesToWrite) {
+  CliResult r = run_ssgi({"run", testdata("sample/sample.####.exr"), "--frames", "2-4", "-o",
+                          path("a.####.exr"), "--rays", "2", "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(entries(), (std::set<std::string>{"a.0002.exr", "a.0003.exr", "a.0004.exr"}));
+  fs::remove_all(dir_);
+  fs::create_directories(dir_);
+  r = run_ssgi(
+      {"run", testdata("sample/sample.2-3#.exr"), "-o", path("b.%04d.exr"), "--rays", "2", "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(entries(), (std::set<std::string>{"b.0002.exr", "b.0003.exr"}));
+}
+
+TEST_F(Cli, MissingFrameInRangeFailsBeforeWritingAnything) {
+  const std::string in = testdata("bad/gap.####.exr");
+  // Frames are resolved before any is processed: exit 4 naming frame 2, nothing written.
+  CliResult r = run_ssgi({"run", in, "--frames", "1-3", "-o", path("g.####.exr"), "--rays", "2"});
+  EXPECT_EQ(r.exit_code, 4);
+  expect_one_error(r, testdata("bad/gap.0002.exr"), "frame 2 is missing");
+  EXPECT_TRUE(entries().empty());
+  // The same range in the name.
+  r = run_ssgi({"run", testdata("bad/gap.1-3#.exr"), "-o", path("g.####.exr"), "--rays", "2"});
+  EXPECT_EQ(r.exit_code, 4);
+  expect_one_error(r, testdata("bad/gap.0002.exr"), "frame 2 is missing");
+  EXPECT_TRUE(entries().empty());
+  // --skip-missing: the others are written, with one warning naming the missing one.
+  r = run_ssgi(
+      {"run", in, "--frames", "1-3", "--skip-missing", "-o", path("g.####.exr"), "--rays", "2"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  ASSERT_FALSE(r.err_lines().empty());
+  EXPECT_EQ(r.err_lines()[0],
+            "ssgi: warning: " + testdata("bad/gap.0002.exr") + ": frame 2 is missing; skipped");
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 3) << r.err;  // + 2 progress lines
+  EXPECT_EQ(entries(), (std::set<std::string>{"g.0001.exr", "g.0003.exr"}));
+}
+
+TEST_F(Cli, WithoutARangeTheFramesOnDiskAreWritten) {
+  // oiiotool's rule: a pattern alone means the frames that exist, so a gap is not an error.
+  const CliResult r = run_ssgi(
+      {"run", testdata("bad/gap.####.exr"), "-o", path("g.####.exr"), "--rays", "2", "-q"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(entries(), (std::set<std::string>{"g.0001.exr", "g.0003.exr"}));
+}
+
+TEST_F(Cli, PatternMatchingNothingIsAnError) {
+  // Never a silent success with zero frames.
+  const std::string in = testdata("sample/nothing.####.exr");
+  const CliResult r = run_ssgi({"run", in, "-o", path("o.####.exr")});
+  EXPECT_EQ(r.exit_code, 4);
+  expect_one_error(r, in, "no files match this pattern");
+  EXPECT_TRUE(entries().empty());
+}
+
+TEST_F(Cli, BadInputsGiveTheirExitCodeOneLineAndNoOutput) {
+  struct Case {
+    std::string file;
+    int exit_code;
+    std::string phrase;
+  };
+  // 4: the file cannot be read as an EXR at all; 3: it reads but cannot be used.
+  const std::vector<Case> cases = {
+      {"bad/missing.0001.exr", 4, "no such file"},
+      {"bad/truncated.exr", 4, "cannot read pixels"},
+      {"bad/notexr.exr", 4, "is not an OpenEXR file"},
+      {"bad/empty.exr", 4, "empty file"},
+      {"bad/nodepth.0001.exr", 3, "no depth channel"},
+  };
+  for (const Case& c : cases) {
+    const std::string in = testdata(c.file);
+    const CliResult r = run_ssgi({"run", in, "-o", path("o.exr"), "--rays", "2"});
+    EXPECT_EQ(r.exit_code, c.exit_code) << c.file << ": " << r.err;
+    expect_one_error(r, in, c.phrase);
+    EXPECT_TRUE(entries().empty()) << c.file;
+  }
+}
+
+TEST_F(Cli, ResolutionChangeFailsThatFrameOnly) {
+  // Frame 1 is written; frame 2 (32x24 after 48x32) fails alone: exit 1, "some frames failed".
+  const CliResult r =
+      run_ssgi({"run", testdata("bad/resize.####.exr"), "-o", path("r.####.exr"), "--rays", "2"});
+  EXPECT_EQ(r.exit_code, 1);
+  const std::vector<std::string> lines = r.err_lines();
+  ASSERT_EQ(lines.size(), 2u) << r.err;
+  EXPECT_EQ(lines[0].rfind("ssgi: frame 1 (1/2): ", 0), 0u);
+  EXPECT_EQ(lines[1], "ssgi: error: " + testdata("bad/resize.0002.exr") +
+                          ": display window 32x24 differs from the first frame's 48x32");
+  EXPECT_EQ(entries(), std::set<std::string>{"r.0001.exr"});
+}
+
+TEST_F(Cli, UnwritableOutputFailsOnceWithoutTemporaryFiles) {
+  const std::string in = testdata("sample/sample.####.exr");
+  std::ofstream(path("file")) << "x";
+  // A directory that is a regular file, and one that does not exist: checked before any frame
+  // is computed, so one line, not one per frame.
+  CliResult r = run_ssgi({"run", in, "-o", path("file/o.####.exr"), "--rays", "2"});
+  EXPECT_EQ(r.exit_code, 4);
+  expect_one_error(r, path("file/o.0001.exr"),
+                   "output directory " + path("file") + " is not a directory");
+  r = run_ssgi({"run", in, "-o", path("none/o.####.exr"), "--rays", "2"});
+  EXPECT_EQ(r.exit_code, 4);
+  expect_one_error(r, path("none/o.0001.exr"),
+                   "output directory " + path("none") + " does not exist");
+  EXPECT_EQ(entries(), std::set<std::string>{"file"});
+  // The target name is taken by a directory: the frame is written to a temporary file, the
+  // rename fails, and the temporary file is removed.
+  fs::create_directory(path("o.0001.exr"));
+  r = run_ssgi(
+      {"run", testdata("sample/sample.0001.exr"), "-o", path("o.####.exr"), "--rays", "2"});
+  EXPECT_EQ(r.exit_code, 4);
+  expect_one_error(r, path("o.0001.exr"),
+                   "cannot move the finished frame into place: Is a directory");
+  EXPECT_EQ(entries(), (std::set<std::string>{"file", "o.0001.exr"}));
+  EXPECT_TRUE(fs::is_empty(path("o.0001.exr")));
+}
+
+TEST_F(Cli, RefusesToOverwriteAnInputFrame) {
+  for (const char* f : {"sample.0001.exr", "sample.0002.exr"})
+    fs::copy_file(testdata(std::string("sample/") + f), path(f));
+  const std::string before = file_bytes(path("sample.0001.exr"));
+  // The same file however the output is spelled: same pattern, %04d, a detour through "..";
+  // the error names the output as spelled.
+  const std::string detour = (dir_ / ".." / dir_.filename()).string();
+  const std::vector<std::pair<std::string, std::string>> outputs = {
+      {path("sample.####.exr"), path("sample.0001.exr")},
+      {path("sample.%04d.exr"), path("sample.0001.exr")},
+      {detour + "/sample.####.exr", detour + "/sample.0001.exr"},
+  };
+  for (const auto& [out, first] : outputs) {
+    const CliResult r = run_ssgi({"run", path("sample.####.exr"), "-o", out, "--rays", "2"});
+    EXPECT_EQ(r.exit_code, 2) << out;
+    EXPECT_EQ(r.err, "ssgi: error: " + first +
+                         ": output would overwrite input frame 1\nTry 'ssgi run --help'.\n");
+  }
+  EXPECT_EQ(file_bytes(path("sample.0001.exr")), before);
+  EXPECT_EQ(entries(), (std::set<std::string>{"sample.0001.exr", "sample.0002.exr"}));
+}
+
+TEST_F(Cli, InputChannelsCollidingWithOursAreKeptAsInputDot) {
+  // Two frames of the sample with an extra `R` and `indirect.R`, as a beauty or an earlier
+  // ssgi run would leave.
+  for (int f = 1; f <= 2; ++f) {
+    const std::string frame = ".000" + std::to_string(f) + ".exr";
+    ExrImage image = read_exr(testdata("sample/sample" + frame));
+    const std::size_t pixels = image.planes.begin()->second.size();
+    for (const char* c : {"R", "indirect.R"}) {
+      image.spec.channelnames.push_back(c);
+      image.planes[c].assign(pixels, 0.125f * f);
+    }
+    write_exr(path("in" + frame), image);
+  }
+  const CliResult r =
+      run_ssgi({"run", path("in.####.exr"), "-o", path("out.####.exr"), "--rays", "2"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // One warning for the whole run, then the two progress lines.
+  const std::vector<std::string> lines = r.err_lines();
+  ASSERT_EQ(lines.size(), 3u) << r.err;
+  EXPECT_EQ(lines[0], "ssgi: warning: " + path("in.0001.exr") +
+                          ": input channels that share a name with ssgi's are kept as "
+                          "input.<name> (e.g. input.R)");
+  for (int f = 1; f <= 2; ++f) {
+    const ExrImage out = read_exr(path("out.000" + std::to_string(f) + ".exr"));
+    const std::set<std::string> names = out.channel_names();
+    EXPECT_EQ(names.count("input.R"), 1u);
+    EXPECT_EQ(names.count("input.indirect.R"), 1u);
+    // The input's values under the new names; ours under the plain ones.
+    EXPECT_EQ(out.planes.at("input.R").front(), 0.125f * f);
+    EXPECT_EQ(out.planes.at("input.indirect.R").back(), 0.125f * f);
+    EXPECT_NE(out.planes.at("R"), out.planes.at("input.R"));
+  }
+}
+
+}  // namespace
