@@ -1,5 +1,6 @@
 // ssgi info: what a sequence holds and what `ssgi run` would do with it.
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -54,6 +55,16 @@ int run_info(int argc, char** argv) {
   const ssgi::SequenceInfo seq = ssgi::open_sequence(in);
   const ssgi::Layout& layout = seq.layout;
   const ssgi::LayoutPreset& preset = layout.preset;
+  // Bad option values fail before anything is printed; input problems (no camera, no direct
+  // light) are reported in their place and the report goes on, then exit with the first one.
+  std::optional<ssgi::Error> problem;
+  std::optional<ssgi::Plan> plan;
+  try {
+    plan = ssgi::make_plan(seq, o.run.gi);
+  } catch (const ssgi::Error& e) {
+    if (e.kind() == ssgi::ErrorKind::kUsage) throw;
+    problem = e;
+  }
 
   std::printf("sequence:      %s\n", in.pattern.c_str());
   std::printf("frames:        %s (%zu to write, %zu on disk)\n", frame_ranges(seq.frames).c_str(),
@@ -83,13 +94,23 @@ int run_info(int argc, char** argv) {
   }
   std::printf("cameras:\n");
   for (int f : seq.frames) {
-    const ssgi::Camera cam = ssgi::read_camera(seq, f, in);
-    std::printf("  frame %-6d %s, horizontal fov %.4f deg\n", f, cam.source.c_str(),
-                cam.hfov_deg(seq.display_window.width()));
+    try {
+      const ssgi::Camera cam = ssgi::read_camera(seq, f, in);
+      std::printf("  frame %-6d %s, horizontal fov %.4f deg\n", f, cam.source.c_str(),
+                  cam.hfov_deg(seq.display_window.width()));
+    } catch (const ssgi::Error& e) {
+      std::printf("  frame %-6d none: %s\n", f, e.what());
+      if (!problem) problem = e;
+    }
   }
-  const ssgi::Plan plan = ssgi::make_plan(seq, o.run.gi);
   std::printf("plan:\n");
-  for (const std::string& reason : plan.reasons) std::printf("  %s\n", reason.c_str());
+  if (plan) {
+    for (const std::string& reason : plan->reasons) std::printf("  %s\n", reason.c_str());
+  } else {
+    std::printf("  cannot run: %s\n", problem->what());
+  }
+  std::fflush(stdout);
+  if (problem) throw *problem;
   return kExitOk;
 }
 

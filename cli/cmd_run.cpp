@@ -44,7 +44,8 @@ int run_run(int argc, char** argv) {
       ssgi::run_sequence(run, [&](const ssgi::FrameReport& f, int done, int total) {
         if (!f.ok) {
           if (tty) std::fprintf(stderr, "\r\033[K");
-          std::fprintf(stderr, "ssgi: error: %s: %s\n", f.error_file.c_str(), f.error.c_str());
+          const std::string& file = f.error_file.empty() ? f.input : f.error_file;
+          std::fprintf(stderr, "ssgi: error: %s: %s\n", file.c_str(), f.error.c_str());
         }
         if (o.quiet) return;
         if (tty) {

@@ -170,6 +170,7 @@ CommonOptions parse_common_options(int argc, char** argv, bool need_output) {
   for (int i = 0; i < argc; ++i) o.command_line += (i ? " " : "ssgi ") + std::string(argv[i]);
   optind = 0;  // getopt_long: restart (0 also resets GNU's internal state)
   opterr = 0;
+  bool env_color_given = false;
   int c;
   while ((c = getopt_long(argc, argv, ":o:vqh", kOptions, nullptr)) != -1) {
     const char* a = optarg;
@@ -209,7 +210,10 @@ CommonOptions parse_common_options(int argc, char** argv, bool need_output) {
         gi.env_up = up[0];
         break;
       }
-      case kEnvColor: gi.env_color = parse_color(a); break;
+      case kEnvColor:
+        gi.env_color = parse_color(a);
+        env_color_given = true;
+        break;
       case kGatherEmission: gi.gather_emission = 1; break;
       case kNoGatherEmission: gi.gather_emission = 0; break;
       case kDenoise: {
@@ -267,6 +271,8 @@ CommonOptions parse_common_options(int argc, char** argv, bool need_output) {
     ssgi::throw_usage(std::string("unexpected argument '") + argv[optind + 1] + "'");
   in.pattern = argv[optind];
   if (need_output && o.run.output.empty()) ssgi::throw_usage("no output given (-o PATTERN)");
+  if (!gi.env_map.empty() && env_color_given)
+    ssgi::throw_usage("--env and --env-color both give the environment: use one");
   return o;
 }
 

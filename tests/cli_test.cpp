@@ -262,6 +262,16 @@ TEST_F(Cli, UsageErrorsExitTwoAndWriteNothing) {
                      "--rays: '0' is not an integer in [1, 4096]");
   expect_usage_error(run_ssgi({"info", in, "--datatype", "double"}), "info",
                      "--datatype must be half or float");
+  // Conflicting sources and bad values are caught before any frame is read or anything printed.
+  expect_usage_error(run_ssgi({"run", in, "-o", out, "--fov", "40", "--camera", "c.json"}), "run",
+                     "--camera and --fov both give the camera: use one");
+  expect_usage_error(run_ssgi({"run", in, "-o", out, "--env", "e.exr", "--env-color", "1"}),
+                     "run", "--env and --env-color both give the environment: use one");
+  expect_usage_error(run_ssgi({"info", in, "--depth-kind", "ndc"}), "info",
+                     "unknown --depth-kind 'ndc' (planar, radial, inverse, negative)");
+  r = run_ssgi({"info", in, "--denoise-sigma-spatial", "0"});
+  EXPECT_EQ(r.out, "");
+  expect_usage_error(r, "info", "denoise: sigma_spatial must be positive (got 0.000000)");
   // Several frames cannot go to one file name.
   expect_usage_error(run_ssgi({"run", in, "-o", path("out.exr")}), "run",
                      "output '" + path("out.exr") +
@@ -292,15 +302,17 @@ TEST_F(Cli, InfoReportsTheSampleSequence) {
 }
 
 TEST_F(Cli, InfoDetectsEveryLayoutPreset) {
-  // The layout fixtures carry no camera, hence --fov. Nuke's and Unreal's passes include no
-  // direct light, so their plan cannot be made without --channel direct=: detected, then exit 3.
+  // The layout fixtures carry no camera, hence --fov (and -q: presets with world-space normals
+  // warn that a --fov camera cannot turn them into camera space). Nuke's and Unreal's passes
+  // include no direct light, so their plan cannot be made without --channel direct=: detected,
+  // then exit 3.
   const std::vector<std::pair<std::string, int>> presets = {
       {"arnold", 0},   {"blender", 0},   {"karma", 0},  {"nuke", 3},
       {"redshift", 0}, {"renderman", 0}, {"unreal", 3}, {"vray", 0},
   };
   for (const auto& [preset, exit_code] : presets) {
     const std::string file = testdata("layouts/" + preset + ".exr");
-    const CliResult r = run_ssgi({"info", file, "--fov", "60"});
+    const CliResult r = run_ssgi({"info", file, "--fov", "60", "-q"});
     EXPECT_EQ(r.exit_code, exit_code) << preset << ": " << r.err;
     EXPECT_NE(r.out.find("\nlayout:        " + preset + " ("), std::string::npos) << preset << ":\n"
                                                                                   << r.out;

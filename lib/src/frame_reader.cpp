@@ -156,15 +156,6 @@ Camera find_camera(const InputOptions& options, const OIIO::ImageSpec& spec, int
               "no camera: the header has no worldToCamera/worldToNDC; give --fov or --camera");
 }
 
-DepthKind depth_kind_for(const SequenceInfo& seq, const InputOptions& options) {
-  if (options.depth_kind.empty()) return seq.layout.preset.depth_kind;
-  DepthKind kind;
-  if (!parse_depth_kind(options.depth_kind, &kind))
-    throw_usage("unknown --depth-kind '" + options.depth_kind +
-                "' (planar, radial, inverse, negative)");
-  return kind;
-}
-
 // Planar camera z from the stored depth; +inf where there is no surface.
 void convert_depth(Image& depth, DepthKind kind, double background, const Camera& camera,
                    const Box2i& display, const Box2i& data) {
@@ -312,6 +303,24 @@ SequenceInfo open_sequence(const InputOptions& options) {
   seq.pixel_aspect = spec.get_float_attribute("PixelAspectRatio", 1.0f);
   if (!(seq.pixel_aspect > 0) || !std::isfinite(seq.pixel_aspect)) seq.pixel_aspect = 1.0;
   seq.layout = resolve_layout(seq.channels, options.layout, options.channel_overrides, first);
+  if (!options.depth_kind.empty() &&
+      !parse_depth_kind(options.depth_kind, &seq.layout.preset.depth_kind))
+    throw_usage("unknown --depth-kind '" + options.depth_kind +
+                "' (planar, radial, inverse, negative)");
+  if (!options.camera.sidecar.empty() && options.camera.hfov_deg > 0)
+    throw_usage("--camera and --fov both give the camera: use one");
+  if (seq.layout.preset.normal_space == NormalSpace::kWorld) {
+    try {
+      if (!find_camera(options, spec, seq.frames.front(), seq.display_window, seq.pixel_aspect,
+                       first)
+               .has_world_transform)
+        log_warning(first +
+                    ": normals are in world space but the camera has no world transform "
+                    "(--fov, or a sidecar without worldToCamera): they are taken as camera-space");
+    } catch (const Error&) {
+      // No camera at all: reading the frame reports it.
+    }
+  }
   return seq;
 }
 
@@ -362,7 +371,7 @@ GBuffer read_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
     g.depth = Image(w, h, 1);
     auto depth = role_planes(Role::kDepth);
     std::copy(depth[0].begin(), depth[0].end(), g.depth.plane(0));
-    convert_depth(g.depth, depth_kind_for(seq, options), preset.background_depth, g.camera,
+    convert_depth(g.depth, preset.depth_kind, preset.background_depth, g.camera,
                   g.display_window, g.data_window);
   }
   if (roles & role_bit(Role::kNormal)) {
