@@ -76,11 +76,12 @@ int run_info(int argc, char** argv) {
   std::printf("layout:        %s (%s)\n", preset.name.c_str(), preset.renderer.c_str());
   if (!layout.detected_because.empty())
     std::printf("               %s\n", layout.detected_because.c_str());
-  std::printf("conventions:   depth %s, background >= %g; normals in %s space; direct light %s "
-              "albedo\n",
-              ssgi::depth_kind_name(preset.depth_kind), preset.background_depth,
-              ssgi::normal_space_name(preset.normal_space),
-              preset.direct_includes_albedo ? "includes" : "excludes");
+  std::printf(
+      "conventions:   depth %s, background >= %g; normals in %s space; direct light %s "
+      "albedo\n",
+      ssgi::depth_kind_name(preset.depth_kind), preset.background_depth,
+      ssgi::normal_space_name(preset.normal_space),
+      preset.direct_includes_albedo ? "includes" : "excludes");
   std::printf("channels:\n");
   for (int r = 0; r < ssgi::kRoleCount; ++r) {
     const auto role = static_cast<ssgi::Role>(r);

@@ -42,6 +42,7 @@ enum LongOnly : int {
   kDenoiseSigmaDepth,
   kDenoiseNormalPower,
   kDenoiseBlur,
+  kTemporal,
   kSeed,
   kThreads,
   kCompression,
@@ -77,6 +78,7 @@ const option kOptions[] = {
     {"denoise-sigma-depth", required_argument, nullptr, kDenoiseSigmaDepth},
     {"denoise-normal-power", required_argument, nullptr, kDenoiseNormalPower},
     {"denoise-blur", required_argument, nullptr, kDenoiseBlur},
+    {"temporal", required_argument, nullptr, kTemporal},
     {"seed", required_argument, nullptr, kSeed},
     {"threads", required_argument, nullptr, kThreads},
     {"compression", required_argument, nullptr, kCompression},
@@ -119,6 +121,26 @@ std::array<float, 3> parse_color(const char* text) {
           static_cast<float>(values[2])};
 }
 
+// --temporal none | ema[:ALPHA] | window[:K]
+void parse_temporal(const char* text, ssgi::GiSettings* gi) {
+  const std::string spec = text;
+  const auto colon = spec.find(':');
+  const std::string mode = spec.substr(0, colon);
+  const std::string arg = colon == std::string::npos ? "" : spec.substr(colon + 1);
+  if (mode == "none" && arg.empty()) {
+    gi->temporal = ssgi::TemporalMode::kNone;
+  } else if (mode == "ema") {
+    gi->temporal = ssgi::TemporalMode::kEma;
+    if (!arg.empty()) gi->ema_alpha = static_cast<float>(parse_double("temporal", arg.c_str()));
+  } else if (mode == "window") {
+    gi->temporal = ssgi::TemporalMode::kWindow;
+    if (!arg.empty())
+      gi->temporal_radius = static_cast<int>(parse_long("temporal", arg.c_str(), 1, 64));
+  } else {
+    ssgi::throw_usage("--temporal must be none, ema[:ALPHA] or window[:K]");
+  }
+}
+
 }  // namespace
 
 const char* common_options_help() {
@@ -148,6 +170,8 @@ const char* common_options_help() {
          "  --denoise MODE        pyramid or none (default pyramid)\n"
          "  --denoise-radius N, --denoise-sigma-spatial S, --denoise-sigma-depth S,\n"
          "  --denoise-normal-power P, --denoise-blur N   denoise parameters (man ssgi)\n"
+         "  --temporal MODE       window[:K] (default, K = 2), ema[:ALPHA] (default 0.1) or\n"
+         "                        none\n"
          "  --seed N              noise seed (default 0)\n"
          "output:\n"
          "  -o, --output PATTERN  output sequence, e.g. out/shot.####.exr\n"
@@ -175,35 +199,68 @@ CommonOptions parse_common_options(int argc, char** argv, bool need_output) {
   while ((c = getopt_long(argc, argv, ":o:vqh", kOptions, nullptr)) != -1) {
     const char* a = optarg;
     switch (c) {
-      case 'o': o.run.output = a; break;
-      case kFrames: in.frames = a; break;
-      case kSkipMissing: in.skip_missing = true; break;
-      case kLayout: in.layout = a; break;
-      case kChannel: in.channel_overrides.push_back(a); break;
-      case kDepthKind: in.depth_kind = a; break;
+      case 'o':
+        o.run.output = a;
+        break;
+      case kFrames:
+        in.frames = a;
+        break;
+      case kSkipMissing:
+        in.skip_missing = true;
+        break;
+      case kLayout:
+        in.layout = a;
+        break;
+      case kChannel:
+        in.channel_overrides.push_back(a);
+        break;
+      case kDepthKind:
+        in.depth_kind = a;
+        break;
       case kFov: {
         in.camera.hfov_deg = parse_double("fov", a);
         if (!(in.camera.hfov_deg > 0 && in.camera.hfov_deg < 180))
           ssgi::throw_usage("--fov must be between 0 and 180 degrees (exclusive)");
         break;
       }
-      case kCamera: in.camera.sidecar = a; break;
-      case kRays: gi.rays = static_cast<int>(parse_long("rays", a, 1, 4096)); break;
-      case kMaxSteps: gi.max_steps = static_cast<int>(parse_long("max-steps", a, 1, 1 << 20)); break;
-      case kMaxDistance: gi.max_distance = parse_double("max-distance", a); break;
-      case kThickness: gi.thickness = parse_double("thickness", a); break;
-      case kStartOffset: gi.start_offset = parse_double("start-offset", a); break;
-      case kBounces: gi.bounces = static_cast<int>(parse_long("bounces", a, 1, 64)); break;
+      case kCamera:
+        in.camera.sidecar = a;
+        break;
+      case kRays:
+        gi.rays = static_cast<int>(parse_long("rays", a, 1, 4096));
+        break;
+      case kMaxSteps:
+        gi.max_steps = static_cast<int>(parse_long("max-steps", a, 1, 1 << 20));
+        break;
+      case kMaxDistance:
+        gi.max_distance = parse_double("max-distance", a);
+        break;
+      case kThickness:
+        gi.thickness = parse_double("thickness", a);
+        break;
+      case kStartOffset:
+        gi.start_offset = parse_double("start-offset", a);
+        break;
+      case kBounces:
+        gi.bounces = static_cast<int>(parse_long("bounces", a, 1, 64));
+        break;
       case kMiss: {
         const std::string mode = a;
-        if (mode == "frame") gi.miss = ssgi::MissMode::kFrame;
-        else if (mode == "env") gi.miss = ssgi::MissMode::kEnvironment;
-        else if (mode == "extend") gi.miss = ssgi::MissMode::kExtend;
-        else if (mode == "auto") gi.miss = ssgi::MissMode::kAuto;
-        else ssgi::throw_usage("--miss must be auto, env, extend or frame");
+        if (mode == "frame")
+          gi.miss = ssgi::MissMode::kFrame;
+        else if (mode == "env")
+          gi.miss = ssgi::MissMode::kEnvironment;
+        else if (mode == "extend")
+          gi.miss = ssgi::MissMode::kExtend;
+        else if (mode == "auto")
+          gi.miss = ssgi::MissMode::kAuto;
+        else
+          ssgi::throw_usage("--miss must be auto, env, extend or frame");
         break;
       }
-      case kEnv: gi.env_map = a; break;
+      case kEnv:
+        gi.env_map = a;
+        break;
       case kEnvUp: {
         const std::string up = a;
         if (up != "y" && up != "z") ssgi::throw_usage("--env-up must be y or z");
@@ -214,40 +271,62 @@ CommonOptions parse_common_options(int argc, char** argv, bool need_output) {
         gi.env_color = parse_color(a);
         env_color_given = true;
         break;
-      case kGatherEmission: gi.gather_emission = 1; break;
-      case kNoGatherEmission: gi.gather_emission = 0; break;
+      case kGatherEmission:
+        gi.gather_emission = 1;
+        break;
+      case kNoGatherEmission:
+        gi.gather_emission = 0;
+        break;
       case kDenoise: {
         const std::string mode = a;
-        if (mode == "none") gi.denoise = ssgi::DenoiseMode::kNone;
-        else if (mode == "pyramid") gi.denoise = ssgi::DenoiseMode::kPyramid;
-        else ssgi::throw_usage("--denoise must be none or pyramid");
+        if (mode == "none")
+          gi.denoise = ssgi::DenoiseMode::kNone;
+        else if (mode == "pyramid")
+          gi.denoise = ssgi::DenoiseMode::kPyramid;
+        else
+          ssgi::throw_usage("--denoise must be none or pyramid");
         break;
       }
       case kDenoiseRadius:
         gi.denoise_settings.radius = static_cast<int>(parse_long("denoise-radius", a, 0, 32));
         break;
       case kDenoiseSigmaSpatial:
-        gi.denoise_settings.sigma_spatial = static_cast<float>(parse_double("denoise-sigma-spatial", a));
+        gi.denoise_settings.sigma_spatial =
+            static_cast<float>(parse_double("denoise-sigma-spatial", a));
         break;
       case kDenoiseSigmaDepth:
-        gi.denoise_settings.sigma_depth = static_cast<float>(parse_double("denoise-sigma-depth", a));
+        gi.denoise_settings.sigma_depth =
+            static_cast<float>(parse_double("denoise-sigma-depth", a));
         break;
       case kDenoiseNormalPower:
-        gi.denoise_settings.normal_power = static_cast<float>(parse_double("denoise-normal-power", a));
+        gi.denoise_settings.normal_power =
+            static_cast<float>(parse_double("denoise-normal-power", a));
         break;
       case kDenoiseBlur:
-        gi.denoise_settings.upsample_blur_radius = static_cast<int>(parse_long("denoise-blur", a, 0, 8));
+        gi.denoise_settings.upsample_blur_radius =
+            static_cast<int>(parse_long("denoise-blur", a, 0, 8));
         break;
-      case kSeed: gi.seed = static_cast<std::uint32_t>(parse_long("seed", a, 0, 4294967295L)); break;
-      case kThreads: o.threads = static_cast<int>(parse_long("threads", a, 0, 4096)); break;
-      case kCompression: o.run.write.compression = ssgi::parse_compression(a); break;
+      case kTemporal:
+        parse_temporal(a, &gi);
+        break;
+      case kSeed:
+        gi.seed = static_cast<std::uint32_t>(parse_long("seed", a, 0, 4294967295L));
+        break;
+      case kThreads:
+        o.threads = static_cast<int>(parse_long("threads", a, 0, 4096));
+        break;
+      case kCompression:
+        o.run.write.compression = ssgi::parse_compression(a);
+        break;
       case kDatatype: {
         const std::string t = a;
         if (t != "half" && t != "float") ssgi::throw_usage("--datatype must be half or float");
         o.run.write.half = t == "half";
         break;
       }
-      case kNoPassthrough: o.run.write.passthrough = false; break;
+      case kNoPassthrough:
+        o.run.write.passthrough = false;
+        break;
       case kLayerPrefix: {
         std::string p = a;
         if (p.empty()) ssgi::throw_usage("--layer-prefix must not be empty");
@@ -255,9 +334,15 @@ CommonOptions parse_common_options(int argc, char** argv, bool need_output) {
         o.run.write.layer_prefix = p;
         break;
       }
-      case 'v': o.verbose = true; break;
-      case 'q': o.quiet = true; break;
-      case 'h': o.help = true; break;
+      case 'v':
+        o.verbose = true;
+        break;
+      case 'q':
+        o.quiet = true;
+        break;
+      case 'h':
+        o.help = true;
+        break;
       case ':':
         ssgi::throw_usage(std::string("option '") + argv[optind - 1] + "' needs a value");
       default:

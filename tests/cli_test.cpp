@@ -265,8 +265,8 @@ TEST_F(Cli, UsageErrorsExitTwoAndWriteNothing) {
   // Conflicting sources and bad values are caught before any frame is read or anything printed.
   expect_usage_error(run_ssgi({"run", in, "-o", out, "--fov", "40", "--camera", "c.json"}), "run",
                      "--camera and --fov both give the camera: use one");
-  expect_usage_error(run_ssgi({"run", in, "-o", out, "--env", "e.exr", "--env-color", "1"}),
-                     "run", "--env and --env-color both give the environment: use one");
+  expect_usage_error(run_ssgi({"run", in, "-o", out, "--env", "e.exr", "--env-color", "1"}), "run",
+                     "--env and --env-color both give the environment: use one");
   expect_usage_error(run_ssgi({"info", in, "--depth-kind", "ndc"}), "info",
                      "unknown --depth-kind 'ndc' (planar, radial, inverse, negative)");
   r = run_ssgi({"info", in, "--denoise-sigma-spatial", "0"});
@@ -518,6 +518,46 @@ TEST_F(Cli, OutputBitsDoNotDependOnThreadCountOrRun) {
           std::memcmp(t2.planes.at(c).data(), again.planes.at(c).data(), a.size() * sizeof(float)),
           0)
           << "run to run, frame " << f << " " << c;
+    }
+  }
+}
+
+TEST_F(Cli, TemporalWindowGivesTheSameBitsInAnyChunking) {
+  // The chunking test: the 10-frame static/ shot (and the panning pan/ shot) as one
+  // run, as chunks of 3 and frame by frame: the window reads the frames on disk around each
+  // output frame whatever --frames selects, so every frame has the same bits.
+  for (const auto& [name, last] :
+       std::vector<std::pair<std::string, int>>{{"static", 10}, {"pan", 6}}) {
+    const std::string in = testdata(name + "/" + name + ".####.exr");
+    ASSERT_EQ(
+        run_ssgi({"run", in, "-o", path(name + "_whole.####.exr"), "--rays", "2", "-q"}).exit_code,
+        0);
+    for (int first = 1; first <= last; first += 3) {
+      const std::string frames =
+          std::to_string(first) + "-" + std::to_string(std::min(first + 2, last));
+      ASSERT_EQ(run_ssgi({"run", in, "--frames", frames, "-o", path(name + "_chunk.####.exr"),
+                          "--rays", "2", "-q"})
+                    .exit_code,
+                0);
+    }
+    for (int f = 1; f <= last; ++f)
+      ASSERT_EQ(run_ssgi({"run", in, "--frames", std::to_string(f), "-o",
+                          path(name + "_single.####.exr"), "--rays", "2", "-q"})
+                    .exit_code,
+                0);
+    for (int f = 1; f <= last; ++f) {
+      char frame[16];
+      std::snprintf(frame, sizeof frame, ".%04d.exr", f);
+      const ExrImage whole = read_exr(path(name + "_whole" + frame));
+      for (const std::string& run : {"_chunk", "_single"}) {
+        const ExrImage other = read_exr(path(name + run + frame));
+        for (const std::string& c : kOurChannels) {
+          const std::vector<float>& a = whole.planes.at(c);
+          ASSERT_EQ(other.planes.at(c).size(), a.size());
+          EXPECT_EQ(std::memcmp(a.data(), other.planes.at(c).data(), a.size() * sizeof(float)), 0)
+              << name << run << " frame " << f << " " << c;
+        }
+      }
     }
   }
 }

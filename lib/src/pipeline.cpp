@@ -29,14 +29,17 @@ void validate(const GiSettings& s) {
     throw_usage("--max-steps must be between 1 and 1048576");
   if (!(s.max_distance >= 0) || !std::isfinite(s.max_distance))
     throw_usage("--max-distance must be >= 0 (0: unlimited)");
-  if (!(s.thickness > 0) || !std::isfinite(s.thickness))
-    throw_usage("--thickness must be > 0");
+  if (!(s.thickness > 0) || !std::isfinite(s.thickness)) throw_usage("--thickness must be > 0");
   if (!(s.start_offset >= 0) || s.start_offset > 1)
     throw_usage("the start offset must be between 0 and 1");
   if (s.bounces < 1 || s.bounces > 64) throw_usage("--bounces must be between 1 and 64");
   for (float c : s.env_color)
     if (!(c >= 0) || !std::isfinite(c)) throw_usage("--env-color must be finite and >= 0");
   if (s.env_up != 'y' && s.env_up != 'z') throw_usage("--env-up must be y or z");
+  if (s.temporal_radius < 1 || s.temporal_radius > 64)
+    throw_usage("--temporal window:K needs K between 1 and 64");
+  if (!(s.ema_alpha > 0 && s.ema_alpha <= 1))
+    throw_usage("--temporal ema:ALPHA needs ALPHA in (0, 1]");
   detail::validate_denoise_settings(s.denoise_settings);
 }
 
@@ -75,8 +78,8 @@ Plan make_plan(const SequenceInfo& seq, const GiSettings& s) {
                 "has no albedo channels (give --channel albedo=NAME)");
   need(Role::kAlbedo, layout.preset.direct_includes_albedo ? "gi = albedo x indirect"
                                                            : "direct light x albedo, and gi");
-  plan.gather_emission = s.gather_emission < 0 ? layout.preset.gather_emission
-                                               : s.gather_emission > 0;
+  plan.gather_emission =
+      s.gather_emission < 0 ? layout.preset.gather_emission : s.gather_emission > 0;
   if (layout.has(Role::kEmission)) {
     need(Role::kEmission, plan.gather_emission ? "added to the composite and gathered by rays"
                                                : "added to the composite (not gathered: the "
@@ -84,11 +87,12 @@ Plan make_plan(const SequenceInfo& seq, const GiSettings& s) {
   } else {
     plan.gather_emission = false;
   }
-  if (layout.has(Role::kBeauty)) need(Role::kBeauty, "background pixels and alpha of the composite");
+  if (layout.has(Role::kBeauty))
+    need(Role::kBeauty, "background pixels and alpha of the composite");
   plan.env_map = !s.env_map.empty();
-  const std::string env =
-      plan.env_map ? "environment map " + s.env_map + " (up axis " + s.env_up + ")"
-                   : "constant colour " + color_string(s.env_color);
+  const std::string env = plan.env_map
+                              ? "environment map " + s.env_map + " (up axis " + s.env_up + ")"
+                              : "constant colour " + color_string(s.env_color);
   std::string misses = std::string("misses (--miss ") + miss_mode_name(s.miss) + "): ";
   switch (s.miss) {
     case MissMode::kEnvironment:
@@ -102,20 +106,41 @@ Plan make_plan(const SequenceInfo& seq, const GiSettings& s) {
       misses += "the surface at the screen edge extended as its plane, else " + env;
       break;
     case MissMode::kAuto:
-      misses += "per frame, the frame estimate when its border shows an enclosure (score "
-                "above 0.6), " + env + " when it does not (below 0.4), blended between";
+      misses +=
+          "per frame, the frame estimate when its border shows an enclosure (score "
+          "above 0.6), " +
+          env + " when it does not (below 0.4), blended between";
       break;
   }
   plan.reasons.push_back(misses);
   plan.cache_hits = s.bounces > 1;
   plan.reasons.push_back(
-      "march: " + std::to_string(s.rays) + " rays per pixel, up to " +
-      std::to_string(s.max_steps) + " steps, " + std::to_string(s.bounces) + " bounce" +
+      "march: " + std::to_string(s.rays) + " rays per pixel, up to " + std::to_string(s.max_steps) +
+      " steps, " + std::to_string(s.bounces) + " bounce" +
       (s.bounces > 1 ? "s (hits kept and re-gathered for each further bounce)" : ""));
   plan.denoise = s.denoise == DenoiseMode::kPyramid;
   plan.reasons.push_back(plan.denoise ? "denoise: bilateral pyramid" : "denoise: none");
-  plan.temporal = TemporalMode::kNone;
-  plan.reasons.push_back("temporal: none (not available yet)");
+  plan.temporal = s.temporal;
+  if (seq.frames_on_disk.size() <= 1) {
+    plan.temporal = TemporalMode::kNone;
+    plan.reasons.push_back("temporal: none (a single frame)");
+  } else if (plan.temporal == TemporalMode::kNone) {
+    plan.reasons.push_back("temporal: none (--temporal none)");
+  } else {
+    if (plan.temporal == TemporalMode::kWindow)
+      plan.reasons.push_back("temporal: symmetric window of +-" +
+                             std::to_string(s.temporal_radius) +
+                             " frames on disk around each output frame (chunk-independent)");
+    else
+      plan.reasons.push_back("temporal: exponential moving average, alpha " +
+                             std::to_string(s.ema_alpha) + ", pre-roll before the first frame");
+    if (layout.has(Role::kMotion))
+      need(Role::kMotion, "moving objects' history follows their motion vectors");
+    else
+      plan.reasons.push_back(
+          "no motion vectors: history through the cameras, moving objects "
+          "rejected by the depth and normal tests");
+  }
   plan.reasons.push_back("composite: direct + emission + albedo x indirect");
   return plan;
 }

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <filesystem>
 
+#include "frame_source.h"
 #include "ssgi/log.h"
 #include "ssgi/pipeline.h"
 #include "ssgi/version.h"
@@ -56,6 +57,7 @@ RunReport run_sequence(const RunOptions& options, const FrameCallback& on_frame)
   write.provenance.emplace_back("ssgi:version", version());
   write.provenance.emplace_back("ssgi:seed", std::to_string(options.gi.seed));
 
+  detail::FrameSource source(seq, options.input, pipeline);
   RunReport report;
   const int total = static_cast<int>(seq.frames.size());
   for (int i = 0; i < total; ++i) {
@@ -65,8 +67,9 @@ RunReport run_sequence(const RunOptions& options, const FrameCallback& on_frame)
     fr.input = seq.pattern.path_for(fr.frame);
     fr.output = out.path_for(fr.frame);
     try {
-      const GBuffer g = read_gbuffer(seq, fr.frame, plan.roles, options.input);
-      FrameResult result = pipeline.composite(g, pipeline.indirect_light(g));
+      detail::FrameSource::Result lit = source.get(fr.frame);
+      const GBuffer& g = *lit.g;
+      FrameResult result = pipeline.composite(g, std::move(lit.indirect));
       write_frame(fr.output, g,
                   {{"", &result.composite, {"R", "G", "B", "A"}},
                    {"indirect", &result.indirect, {"R", "G", "B"}},

@@ -72,7 +72,7 @@ struct GiSettings {
   int gather_emission = -1;
   DenoiseMode denoise = DenoiseMode::kPyramid;
   DenoiseSettings denoise_settings;
-  TemporalMode temporal = TemporalMode::kNone;
+  TemporalMode temporal = TemporalMode::kWindow;
   int temporal_radius = 2;     // window: +-K frames
   float ema_alpha = 0.1f;      // EMA: weight of the current frame
   std::uint32_t seed = 0;

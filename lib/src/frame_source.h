@@ -1,0 +1,54 @@
+// The frames a run needs, each read and lit once: the frame loop asks for an output frame's
+// G-buffer and (temporally filtered) indirect light, and this keeps the ring of neighbours the
+// temporal stage reads — 2K + 1 frames for the window, the previous frame for the EMA.
+#pragma once
+
+#include <map>
+#include <memory>
+
+#include "ssgi/gbuffer.h"
+#include "ssgi/io.h"
+#include "ssgi/pipeline.h"
+
+namespace ssgi::detail {
+
+class FrameSource {
+ public:
+  FrameSource(const SequenceInfo& sequence, const InputOptions& options, const Pipeline& pipeline);
+
+  // Output frame `frame`: its G-buffer and its indirect light after the temporal stage. Reads
+  // and lights the neighbours the stage needs (frames on disk within the window, or the EMA's
+  // pre-roll), dropping what no later frame needs. A neighbour that cannot be read is left out
+  // with a warning; the frame's own failure throws its ssgi::Error.
+  struct Result {
+    std::shared_ptr<const GBuffer> g;
+    Image indirect;
+  };
+  Result get(int frame);
+
+  // Bytes held in the ring now (G-buffers and indirect light), for memory reports.
+  std::size_t bytes_held() const;
+
+ private:
+  struct Lit {
+    std::shared_ptr<const GBuffer> g;
+    Image indirect;  // the frame's own light, before temporal filtering
+  };
+  Lit light(int frame) const;
+  Result window(int frame);
+  Result ema(int frame);
+  // The frame on disk just before `frame`, or `frame` itself when there is none.
+  int previous_on_disk(int frame) const;
+
+  const SequenceInfo& seq_;
+  const InputOptions& options_;
+  const Pipeline& pipeline_;
+  std::map<int, Lit> ring_;  // window: frames on disk around the last output frame
+  // EMA: the last frame stepped and its filtered output.
+  int ema_frame_ = 0;
+  bool ema_valid_ = false;
+  std::shared_ptr<const GBuffer> ema_g_;
+  Image ema_out_;
+};
+
+}  // namespace ssgi::detail
