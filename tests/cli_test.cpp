@@ -640,14 +640,17 @@ TEST_F(Cli, BadInputsGiveTheirExitCodeOneLineAndNoOutput) {
 
 TEST_F(Cli, ResolutionChangeFailsThatFrameOnly) {
   // Frame 1 is written; frame 2 (32x24 after 48x32) fails alone: exit 1, "some frames failed".
+  // Frame 1's temporal window leaves frame 2 out, with a warning.
   const CliResult r =
       run_ssgi({"run", testdata("bad/resize.####.exr"), "-o", path("r.####.exr"), "--rays", "2"});
   EXPECT_EQ(r.exit_code, 1);
   const std::vector<std::string> lines = r.err_lines();
-  ASSERT_EQ(lines.size(), 2u) << r.err;
-  EXPECT_EQ(lines[0].rfind("ssgi: frame 1 (1/2): ", 0), 0u);
-  EXPECT_EQ(lines[1], "ssgi: error: " + testdata("bad/resize.0002.exr") +
-                          ": display window 32x24 differs from the first frame's 48x32");
+  const std::string why = "display window 32x24 differs from the first frame's 48x32";
+  ASSERT_EQ(lines.size(), 3u) << r.err;
+  EXPECT_EQ(lines[0], "ssgi: warning: " + testdata("bad/resize.0002.exr") + ": " + why +
+                          "; left out of the temporal window");
+  EXPECT_EQ(lines[1].rfind("ssgi: frame 1 (1/2): ", 0), 0u);
+  EXPECT_EQ(lines[2], "ssgi: error: " + testdata("bad/resize.0002.exr") + ": " + why);
   EXPECT_EQ(entries(), std::set<std::string>{"r.0001.exr"});
 }
 
