@@ -1,12 +1,12 @@
 // Temporal stability of ssgi's indirect light on a Cycles sample sequence: the mean absolute
 // frame-to-frame change of `indirect` on static surfaces, relative to its mean, following each
 // surface point into the previous frame with the input's motion vectors (Blender's Vector pass:
-// pixels, y up, XY = previous - current). Static: the point's depth in the previous frame
-// (bilinear) is within 1% of what the vector's source pixel holds, and the point is not on a
-// moving object (its vector agrees with its neighbours' within 0.5 px is not required: the
-// stage scene's camera is still, so static means |vector| < 0.01 px; the room's camera pans and
-// nothing else moves, so every surface is static). The same measure on the truth (DiffInd) is
-// printed beside it: the truth changes too where lighting changes (the stage's rolling ball).
+// pixels, y up, XY = previous - current) and skipping points whose previous depth differs by
+// more than 5% (disocclusions). With a still camera (STATIC_CAMERA = 1, `stage`) only pixels
+// whose vector is below 0.01 px count, which leaves out the moving ball; with a moving camera
+// and a still scene (`room`) every surface counts. The same measure on the truth (DiffInd) is
+// printed beside it: the truth changes too, with its path-tracing noise and where the lighting
+// changes.
 // Usage: temporal_stability IN_PATTERN OUT_PATTERN FIRST LAST STATIC_CAMERA(0|1)
 #include <OpenImageIO/imageio.h>
 
