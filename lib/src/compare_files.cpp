@@ -12,6 +12,7 @@
 #include <map>
 #include <memory>
 
+#include "oiio_files.h"
 #include "ssgi/compare.h"
 #include "ssgi/error.h"
 
@@ -20,12 +21,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// OIIO's messages can span lines; ours are one line.
-std::string one_line(std::string s) {
-  std::replace(s.begin(), s.end(), '\n', ' ');
-  while (!s.empty() && s.back() == ' ') s.pop_back();
-  return s;
-}
 
 std::string join(const std::vector<std::string>& items, const char* separator) {
   std::string out;
@@ -107,14 +102,6 @@ std::string find_depth_channel(const NamedChannels& file) {
   return {};
 }
 
-std::unique_ptr<OIIO::ImageInput> open_input(const std::string& path) {
-  std::error_code ec;
-  if (!fs::exists(path, ec)) throw_io(path, "no such file");
-  if (fs::is_directory(path, ec)) throw_io(path, "is a directory, not an image");
-  auto in = OIIO::ImageInput::open(path);
-  if (!in) throw_io(path, "cannot read image: " + one_line(OIIO::geterror()));
-  return in;
-}
 
 FileChannels probe_channels(OIIO::ImageInput& in) {
   FileChannels file;
@@ -168,7 +155,7 @@ Image read_planes(OIIO::ImageInput& in, const std::vector<ChannelRef>& refs, con
     const int n = hi - lo + 1;
     std::vector<float> interleaved(image.plane_size() * n);
     if (!in.read_image(subimage, 0, lo, hi + 1, OIIO::TypeDesc::FLOAT, interleaved.data()))
-      throw_io(path, "cannot read pixels: " + one_line(in.geterror()));
+      throw_io(path, "cannot read pixels: " + detail::one_line(in.geterror()));
     for (std::size_t k = 0; k < items.size(); ++k) {
       float* plane = image.plane(static_cast<int>(items[k]));
       const int c = index[k] - lo;
@@ -178,14 +165,6 @@ Image read_planes(OIIO::ImageInput& in, const std::vector<ChannelRef>& refs, con
   return image;
 }
 
-// Same directory (so that the rename is atomic), hidden, and keeping the extension that tells
-// OIIO the format.
-std::string temp_path_for(const std::string& path) {
-  const fs::path target(path);
-  return (target.parent_path() / ("." + target.filename().string() + ".tmp" +
-                                  std::to_string(::getpid()) + target.extension().string()))
-      .string();
-}
 
 void write_difference(const std::string& path, const Image& diff,
                       const std::vector<std::string>& names, const Box2i& data,
@@ -208,21 +187,7 @@ void write_difference(const std::string& path, const Image& diff,
     for (std::size_t p = 0; p < diff.plane_size(); ++p) interleaved[p * n + c] = plane[p];
   }
 
-  const std::string temp = temp_path_for(path);
-  auto out = OIIO::ImageOutput::create(path);
-  if (!out) throw_io(path, "cannot write this format: " + one_line(OIIO::geterror()));
-  const bool written = out->open(temp, spec) &&
-                       out->write_image(OIIO::TypeDesc::FLOAT, interleaved.data()) && out->close();
-  if (!written) {
-    const std::string why = one_line(out->geterror());
-    std::remove(temp.c_str());
-    throw_io(path, "cannot write the difference image: " + why);
-  }
-  if (std::rename(temp.c_str(), path.c_str()) != 0) {
-    const std::string why = std::strerror(errno);
-    std::remove(temp.c_str());
-    throw_io(path, "cannot rename " + temp + " to it: " + why);
-  }
+  detail::write_image_atomically(path, spec, interleaved.data(), "difference image");
 }
 
 }  // namespace
@@ -296,8 +261,8 @@ std::vector<LayerChannels> select_layers(const std::string& a_path, const FileCh
 
 FileCompareResult compare_files(const std::string& a_path, const std::string& b_path,
                                 const FileCompareOptions& options) {
-  auto a_in = open_input(a_path);
-  auto b_in = open_input(b_path);
+  auto a_in = detail::open_image(a_path);
+  auto b_in = detail::open_image(b_path);
   const FileChannels a_file = probe_channels(*a_in), b_file = probe_channels(*b_in);
   const NamedChannels a_named = name_channels(a_file), b_named = name_channels(b_file);
 

@@ -10,6 +10,7 @@
 #include <regex>
 
 #include "camera_header.h"
+#include "oiio_files.h"
 #include "ssgi/error.h"
 #include "ssgi/io.h"
 #include "ssgi/log.h"
@@ -19,20 +20,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// OIIO's messages can span lines; ours are one line.
-std::string one_line(std::string s) {
-  std::replace(s.begin(), s.end(), '\n', ' ');
-  while (!s.empty() && s.back() == ' ') s.pop_back();
-  return s;
-}
-
-std::unique_ptr<OIIO::ImageInput> open_image(const std::string& path) {
-  std::error_code ec;
-  if (!fs::exists(path, ec)) throw_io(path, "no such file");
-  if (fs::is_directory(path, ec)) throw_io(path, "is a directory, not an image");
-  if (fs::file_size(path, ec) == 0) throw_io(path, "empty file");
-  auto in = OIIO::ImageInput::open(path);
-  if (!in) throw_io(path, "cannot read image: " + one_line(OIIO::geterror()));
+// Opens an input frame: an OpenEXR file or a clear error.
+std::unique_ptr<OIIO::ImageInput> open_exr(const std::string& path) {
+  auto in = detail::open_image(path);
   if (std::string(in->format_name()) != "openexr")
     throw_io(path, std::string("not an OpenEXR file (") + in->format_name() + ")");
   return in;
@@ -118,7 +108,7 @@ std::vector<std::vector<float>> read_channels(OIIO::ImageInput& in, int subimage
   const std::size_t pixels = static_cast<std::size_t>(spec.width) * spec.height;
   std::vector<float> interleaved(pixels * n);
   if (!in.read_image(subimage, 0, lo, hi + 1, OIIO::TypeDesc::FLOAT, interleaved.data()))
-    throw_io(path, "cannot read pixels: " + one_line(in.geterror()));
+    throw_io(path, "cannot read pixels: " + detail::one_line(in.geterror()));
   std::vector<std::vector<float>> planes(wanted.size(), std::vector<float>(pixels));
   for (std::size_t i = 0; i < wanted.size(); ++i) {
     const int c = index[i] - lo;
@@ -294,7 +284,7 @@ SequenceInfo open_sequence(const InputOptions& options) {
   if (seq.frames.empty()) throw_io(options.pattern, "none of the requested frames exist");
 
   const std::string first = seq.pattern.path_for(seq.frames.front());
-  auto in = open_image(first);
+  auto in = open_exr(first);
   seq.channels = probe_channels(*in);
   const OIIO::ImageSpec& spec = in->spec();
   seq.display_window = display_window_of(spec);
@@ -326,14 +316,14 @@ SequenceInfo open_sequence(const InputOptions& options) {
 
 Camera read_camera(const SequenceInfo& seq, int frame, const InputOptions& options) {
   const std::string path = seq.pattern.path_for(frame);
-  auto in = open_image(path);
+  auto in = open_exr(path);
   return find_camera(options, in->spec(), frame, seq.display_window, seq.pixel_aspect, path);
 }
 
 GBuffer read_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
                      const InputOptions& options) {
   const std::string path = seq.pattern.path_for(frame);
-  auto in = open_image(path);
+  auto in = open_exr(path);
   const OIIO::ImageSpec spec = in->spec();
   check_windows(seq, spec, path);
 

@@ -8,6 +8,7 @@
 #include <memory>
 #include <set>
 
+#include "oiio_files.h"
 #include "ssgi/error.h"
 #include "ssgi/io.h"
 #include "ssgi/log.h"
@@ -19,10 +20,6 @@ namespace fs = std::filesystem;
 
 constexpr float kHalfMax = 65504.0f;
 
-std::string one_line(std::string s) {
-  std::replace(s.begin(), s.end(), '\n', ' ');
-  return s;
-}
 
 // One output channel: its name, pixel format and where its data window values come from.
 struct OutChannel {
@@ -37,7 +34,7 @@ struct OutChannel {
 // per-AOV parts hold plain R, G, B), so that a single-part output keeps them apart.
 std::vector<OutChannel> read_passthrough(const std::string& path, const Box2i& data) {
   auto in = OIIO::ImageInput::open(path);
-  if (!in) throw_io(path, "cannot read image: " + one_line(OIIO::geterror()));
+  if (!in) throw_io(path, "cannot read image: " + detail::one_line(OIIO::geterror()));
   std::vector<OutChannel> out;
   int nsub = 0;
   while (in->seek_subimage(nsub, 0)) ++nsub;
@@ -51,7 +48,7 @@ std::vector<OutChannel> read_passthrough(const std::string& path, const Box2i& d
     const std::size_t pixels = static_cast<std::size_t>(spec.width) * spec.height;
     std::vector<float> interleaved(pixels * n);
     if (!in->read_image(s, 0, 0, n, OIIO::TypeDesc::FLOAT, interleaved.data()))
-      throw_io(path, "cannot read pixels: " + one_line(in->geterror()));
+      throw_io(path, "cannot read pixels: " + detail::one_line(in->geterror()));
     const std::string part = spec.get_string_attribute("oiio:subimagename");
     for (int c = 0; c < n; ++c) {
       OutChannel ch;
@@ -78,13 +75,6 @@ bool keep_attribute(const std::string& name) {
   return kStructural.count(name) == 0;
 }
 
-std::string temp_path_for(const fs::path& target) {
-  // Same directory (so rename is atomic), hidden, and ending in .exr: OIIO picks the format by
-  // extension.
-  return (target.parent_path() /
-          ("." + target.filename().string() + ".tmp" + std::to_string(::getpid()) + ".exr"))
-      .string();
-}
 
 }  // namespace
 
@@ -151,7 +141,7 @@ void write_frame(const std::string& path, const GBuffer& frame,
   }
 
   auto in = OIIO::ImageInput::open(frame.path);
-  if (!in) throw_io(frame.path, "cannot read header: " + one_line(OIIO::geterror()));
+  if (!in) throw_io(frame.path, "cannot read header: " + detail::one_line(OIIO::geterror()));
   const OIIO::ImageSpec& in_spec = in->spec();
 
   const int n = static_cast<int>(channels.size());
@@ -188,24 +178,7 @@ void write_frame(const std::string& path, const GBuffer& frame,
     }
   }
 
-  const fs::path target = fs::absolute(path);
-  std::error_code ec;
-  const std::string tmp = temp_path_for(target);
-  auto out = OIIO::ImageOutput::create(tmp);
-  bool ok = out && out->open(tmp, spec) &&
-            out->write_image(OIIO::TypeDesc::FLOAT, interleaved.data()) && out->close();
-  if (!ok) {
-    const std::string why = out ? one_line(out->geterror()) : one_line(OIIO::geterror());
-    out.reset();
-    fs::remove(tmp, ec);
-    throw_io(path, "cannot write: " + (why.empty() ? std::string("unknown error") : why));
-  }
-  fs::rename(tmp, target, ec);
-  if (ec) {
-    const std::string why = ec.message();  // before remove() overwrites ec
-    fs::remove(tmp, ec);
-    throw_io(path, "cannot move the finished frame into place: " + why);
-  }
+  detail::write_image_atomically(path, spec, interleaved.data(), "frame");
 }
 
 }  // namespace ssgi
