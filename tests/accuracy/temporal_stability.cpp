@@ -8,39 +8,18 @@
 // printed beside it: the truth changes too, with its path-tracing noise and where the lighting
 // changes.
 // Usage: temporal_stability IN_PATTERN OUT_PATTERN FIRST LAST STATIC_CAMERA(0|1)
-#include <OpenImageIO/imageio.h>
-
 #include <cmath>
 #include <cstdio>
 #include <map>
 #include <string>
 #include <vector>
 
+#include "exr_planes.h"
+
 namespace {
 
-using Planes = std::map<std::string, std::vector<float>>;
-
-Planes read_all(const std::string& path, int* w, int* h) {
-  auto in = OIIO::ImageInput::open(path);
-  if (!in) {
-    std::fprintf(stderr, "temporal_stability: %s: %s\n", path.c_str(), OIIO::geterror().c_str());
-    std::exit(4);
-  }
-  const OIIO::ImageSpec& spec = in->spec();
-  *w = spec.width;
-  *h = spec.height;
-  const int n = spec.nchannels;
-  const std::size_t pixels = static_cast<std::size_t>(spec.width) * spec.height;
-  std::vector<float> data(pixels * n);
-  in->read_image(0, 0, 0, n, OIIO::TypeDesc::FLOAT, data.data());
-  Planes planes;
-  for (int c = 0; c < n; ++c) {
-    auto& p = planes[spec.channelnames[c]];
-    p.resize(pixels);
-    for (std::size_t i = 0; i < pixels; ++i) p[i] = data[i * n + c];
-  }
-  return planes;
-}
+using accuracy::plane;
+using accuracy::Planes;
 
 std::string frame_path(const std::string& pattern, int frame) {
   char digits[16];
@@ -79,13 +58,13 @@ int main(int argc, char** argv) {
   int w, h;
   Planes prev_in, prev_out;
   for (int f = first; f <= last; ++f) {
-    Planes in = read_all(frame_path(argv[1], f), &w, &h);
-    Planes out = read_all(frame_path(argv[2], f), &w, &h);
+    Planes in = accuracy::read_planes(frame_path(argv[1], f), &w, &h);
+    Planes out = accuracy::read_planes(frame_path(argv[2], f), &w, &h);
     if (f > first) {
-      const auto& depth = in.at(v + "Depth.Z");
-      const auto& prev_depth = prev_in.at(v + "Depth.Z");
-      const auto& vx = in.at(v + "Vector.X");
-      const auto& vy = in.at(v + "Vector.Y");
+      const auto& depth = plane(in, v + "Depth.Z");
+      const auto& prev_depth = plane(prev_in, v + "Depth.Z");
+      const auto& vx = plane(in, v + "Vector.X");
+      const auto& vy = plane(in, v + "Vector.Y");
       for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
           const std::size_t i = static_cast<std::size_t>(y) * w + x;
@@ -97,10 +76,11 @@ int main(int argc, char** argv) {
           const float pd = bilinear(prev_depth, w, h, px, py);
           if (!(pd < 1e9f) || std::fabs(pd - depth[i]) > 0.05f * depth[i]) continue;
           for (int c = 0; c < 3; ++c) {
-            const float o = out.at(std::string("indirect.") + rgb[c])[i];
-            const float po = bilinear(prev_out.at(std::string("indirect.") + rgb[c]), w, h, px, py);
-            const float t = in.at(v + "DiffInd." + rgb[c])[i];
-            const float pt = bilinear(prev_in.at(v + "DiffInd." + rgb[c]), w, h, px, py);
+            const float o = plane(out, std::string("indirect.") + rgb[c])[i];
+            const float po =
+                bilinear(plane(prev_out, std::string("indirect.") + rgb[c]), w, h, px, py);
+            const float t = plane(in, v + "DiffInd." + rgb[c])[i];
+            const float pt = bilinear(plane(prev_in, v + "DiffInd." + rgb[c]), w, h, px, py);
             ours_change += std::fabs(o - po);
             ours_sum += o;
             truth_change += std::fabs(t - pt);

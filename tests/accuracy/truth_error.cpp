@@ -2,48 +2,18 @@
 // relative RMSE (RMSE / mean of the truth over surface pixels, all channels) of `indirect`
 // against DiffInd, and of the composite against (DiffDir + DiffInd) x DiffCol + Emit, plus
 // the same for no GI at all. Usage: truth_error INPUT.exr OUTPUT.exr [LAYER_PREFIX]
-#include <OpenImageIO/imageio.h>
-
 #include <cmath>
 #include <cstdio>
 #include <map>
 #include <string>
 #include <vector>
 
+#include "exr_planes.h"
+
 namespace {
 
-using Planes = std::map<std::string, std::vector<float>>;
-
-Planes read_all(const std::string& path, int* w, int* h) {
-  auto in = OIIO::ImageInput::open(path);
-  if (!in) {
-    std::fprintf(stderr, "truth_error: %s: %s\n", path.c_str(), OIIO::geterror().c_str());
-    std::exit(4);
-  }
-  const OIIO::ImageSpec& spec = in->spec();
-  *w = spec.width;
-  *h = spec.height;
-  const int n = spec.nchannels;
-  const std::size_t pixels = static_cast<std::size_t>(spec.width) * spec.height;
-  std::vector<float> data(pixels * n);
-  in->read_image(0, 0, 0, n, OIIO::TypeDesc::FLOAT, data.data());
-  Planes planes;
-  for (int c = 0; c < n; ++c) {
-    auto& p = planes[spec.channelnames[c]];
-    p.resize(pixels);
-    for (std::size_t i = 0; i < pixels; ++i) p[i] = data[i * n + c];
-  }
-  return planes;
-}
-
-const std::vector<float>& plane(const Planes& p, const std::string& name) {
-  auto it = p.find(name);
-  if (it == p.end()) {
-    std::fprintf(stderr, "truth_error: missing channel %s\n", name.c_str());
-    std::exit(3);
-  }
-  return it->second;
-}
+using accuracy::plane;
+using accuracy::Planes;
 
 }  // namespace
 
@@ -54,8 +24,8 @@ int main(int argc, char** argv) {
   }
   const std::string prefix = argc > 3 ? std::string(argv[3]) + "." : "";
   int w, h, w2, h2;
-  const Planes in = read_all(argv[1], &w, &h);
-  const Planes out = read_all(argv[2], &w2, &h2);
+  const Planes in = accuracy::read_planes(argv[1], &w, &h);
+  const Planes out = accuracy::read_planes(argv[2], &w2, &h2);
   const std::string v = "ViewLayer.";
   const auto& depth = plane(in, v + "Depth.Z");
   double se_ind = 0, se_comp = 0, se_ind0 = 0, se_comp0 = 0, sum_ind = 0, sum_comp = 0;
