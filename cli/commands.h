@@ -17,5 +17,6 @@ enum ExitCode : int {
 int run_run(int argc, char** argv);
 int run_info(int argc, char** argv);
 int run_compare(int argc, char** argv);
+int run_reference(int argc, char** argv);
 
 }  // namespace ssgi_cli

@@ -21,6 +21,8 @@ const Subcommand kSubcommands[] = {
     {"info", "print the layout, cameras and processing plan of a sequence", ssgi_cli::run_info},
     {"compare", "compare images or sequences with error metrics and thresholds",
      ssgi_cli::run_compare},
+    {"reference", "trace the converged answer with Embree, to measure run against",
+     ssgi_cli::run_reference},
 };
 
 void print_usage(std::FILE* out) {
