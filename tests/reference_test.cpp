@@ -219,21 +219,16 @@ std::vector<double> march_errors(const std::vector<MarchSetting>& settings) {
 }
 
 // The convergence test: as rays and steps grow the march's error against the reference
-// falls at every step. Ray k of the march is ray k of the reference, so at 1024 rays the noise
-// cancels and what remains is the march's bias against the surface model.
-TEST(Reference, MarchErrorFallsAsRaysAndStepsGrow) {
+// (1024 rays per pixel) falls at every step and ends below 2% of the reference's mean. Ray k of
+// the march is ray k of the reference, so at 1024 rays the noise cancels and what remains is
+// the march's disagreement with the surface model. With a step budget that covers the ray the
+// march walks the mesh exactly and agrees with Embree to float rounding (measured 0.0000, every
+// ray of this 96x64 frame is shorter than 1024 px); the earlier rows are mostly noise.
+TEST(Reference, MarchConvergesToTheReference) {
   const std::vector<double> errors =
       march_errors({{4, 8}, {16, 32}, {64, 128}, {256, 1024}, {1024, 1024}});
   for (std::size_t i = 1; i < errors.size(); ++i) EXPECT_LT(errors[i], errors[i - 1]) << i;
-}
-
-// The bound: at 1024 rays the march is within 2% of the reference's mean. Disabled: the
-// march samples the mesh once per pixel along the ray's major axis, so a ray that crosses a slab
-// between two samples, or enters one up to a pixel before its first sample inside, brings
-// another pixel's light. That bias measures 7.8% here; a march that walks the mesh's triangles
-// and solves each one exactly (inverse depth is affine along both) measured 0.15%.
-TEST(Reference, DISABLED_MarchIsWithinTwoPercentOfTheReference) {
-  EXPECT_LT(march_errors({{1024, 1024}}).back(), 0.02);
+  EXPECT_LT(errors.back(), 0.02);
 }
 
 }  // namespace

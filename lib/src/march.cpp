@@ -11,13 +11,6 @@
 namespace ssgi::detail {
 namespace {
 
-// Rays that head towards the camera are clipped where they reach this fraction of their
-// origin's depth: nothing nearer can be in the depth buffer's view.
-constexpr float kNearFraction = 1e-3f;
-// "Unlimited" rays end this many origin depths away; far enough that their projection is
-// within a fraction of a pixel of the vanishing point.
-constexpr float kFarFactor = 1e6f;
-
 struct Tracer {
   const GBuffer& g;
   const GiSettings& settings;
@@ -60,8 +53,8 @@ struct Tracer {
   // allow); its depth is interpolated perspective-correctly (1/z is linear in screen space,
   // McGuire & Mara 2014) and tested against the mesh of surface_model.h.
   int march_ray(const Vec3f& o, const Vec3f& d, float jitter, int self_x, int self_y) const {
-    float t_end = settings.max_distance > 0 ? static_cast<float>(settings.max_distance)
-                                            : kFarFactor * o.z;
+    float t_end =
+        settings.max_distance > 0 ? static_cast<float>(settings.max_distance) : kFarFactor * o.z;
     if (d.z < 0) t_end = std::min(t_end, (o.z - kNearFraction * o.z) / -d.z);
     if (!(t_end > 0)) return -1;
     const Vec3f e{o.x + t_end * d.x, o.y + t_end * d.y, o.z + t_end * d.z};
@@ -89,23 +82,41 @@ struct Tracer {
       }
       return true;
     };
-    if (!clip(-dx, sx0) || !clip(dx, width - sx0) || !clip(-dy, sy0) ||
-        !clip(dy, height - sy0) || !(f_hi > f_lo))
+    if (!clip(-dx, sx0) || !clip(dx, width - sx0) || !clip(-dy, sy0) || !clip(dy, height - sy0) ||
+        !(f_hi > f_lo))
       return -1;
     const bool leaves_screen = f_hi < 1.0f;
 
     const float span = f_hi - f_lo;
     const float length_px = std::max(std::fabs(dx), std::fabs(dy)) * span;
-    const int steps = static_cast<int>(
-        std::clamp(std::ceil(length_px), 1.0f, static_cast<float>(settings.max_steps)));
-    const float df = span / steps;
+    const Segment seg{sx0, sy0, dx, dy, h0, h1, f_lo, f_hi};
+    const int hit = length_px <= static_cast<float>(settings.max_steps)
+                        ? walk_exact(seg, self_x, self_y)
+                        : march_sampled(seg, settings.max_steps, jitter, self_x, self_y);
+    if (hit >= 0) return hit;
+    if (leaves_screen && settings.miss == MissMode::kExtend)
+      return extend_edge(o, d, sx0 + dx * f_hi, sy0 + dy * f_hi);
+    return -1;
+  }
+
+  // A ray's screen segment: data-window pixel position s0 + f (s1 - s0) and inverse depth
+  // h0 + f (h1 - h0) (linear in screen space), for f in [f_lo, f_hi].
+  struct Segment {
+    float sx0, sy0, dx, dy, h0, h1, f_lo, f_hi;
+  };
+
+  // Samples the segment at `steps` evenly spaced, jittered points: a sample hits when it is
+  // inside a slab, or when the ray passed the front of one continuous surface since the last
+  // sample. Approximate (it can step over a thin slab or hit a pixel late); used when the ray
+  // is longer than the step budget.
+  int march_sampled(const Segment& s, int steps, float jitter, int self_x, int self_y) const {
+    const float df = (s.f_hi - s.f_lo) / steps;
     const float inf = std::numeric_limits<float>::infinity();
-    // The previous sample, for rays that cross a surface's front between two samples.
     bool prev_valid = false, prev_in_front = false;
     float prev_z = 0.0f;
     for (int i = 0; i < steps; ++i) {
-      const float f = f_lo + df * (i + jitter);
-      const float sx = sx0 + dx * f, sy = sy0 + dy * f;
+      const float f = s.f_lo + df * (i + jitter);
+      const float sx = s.sx0 + s.dx * f, sy = s.sy0 + s.dy * f;
       if (static_cast<int>(std::floor(sx)) == self_x && static_cast<int>(std::floor(sy)) == self_y)
         continue;
       MeshPoint surface;
@@ -113,10 +124,9 @@ struct Tracer {
         prev_valid = false;
         continue;
       }
-      const float hr = h0 + (h1 - h0) * f;
+      const float hr = s.h0 + (s.h1 - s.h0) * f;
       const float z_ray = hr > 0 ? 1.0f / hr : inf;
       const bool behind_front = z_ray >= surface.z;
-      // Inside the slab, or through the front of one continuous surface since the last sample.
       if (behind_front && (z_ray <= model.slab_back(surface.z) ||
                            (prev_valid && prev_in_front && model.connected(prev_z, surface.z))))
         return surface.pixel;
@@ -124,9 +134,119 @@ struct Tracer {
       prev_in_front = !behind_front;
       prev_z = surface.z;
     }
-    if (leaves_screen && settings.miss == MissMode::kExtend)
-      return extend_edge(o, d, sx0 + dx * f_hi, sy0 + dy * f_hi);
     return -1;
+  }
+
+  // Walks every mesh triangle the segment crosses, in order (a 2-D DDA over the quads of pixel
+  // centres, each split at its diagonal), and solves exactly where the ray is inside the
+  // triangle's slab: within one triangle the ray's and the surface's inverse depths are both
+  // affine in f, so "behind the front, before the back" is an interval. The first point of it
+  // outside the ray's own pixel is the hit. This is the surface model itself, which the Embree
+  // reference traces too.
+  int walk_exact(const Segment& s, int self_x, int self_y) const {
+    float own_lo = 2.0f, own_hi = 2.0f;  // where the segment is inside its own pixel
+    clip_to_box(s, self_x, self_y, self_x + 1.0f, self_y + 1.0f, &own_lo, &own_hi);
+    const float past_own = kPastEdgePx / std::max(std::fabs(s.dx), std::fabs(s.dy));
+    const float u0 = s.sx0 - 0.5f, v0 = s.sy0 - 0.5f;  // lattice of pixel centres
+    const float inf = std::numeric_limits<float>::infinity();
+    const float f_start = s.f_lo;
+    int i = static_cast<int>(std::floor(u0 + s.dx * f_start));
+    int j = static_cast<int>(std::floor(v0 + s.dy * f_start));
+    const int step_i = s.dx > 0 ? 1 : -1, step_j = s.dy > 0 ? 1 : -1;
+    float next_u = s.dx != 0 ? ((step_i > 0 ? i + 1 : i) - u0) / s.dx : inf;
+    float next_v = s.dy != 0 ? ((step_j > 0 ? j + 1 : j) - v0) / s.dy : inf;
+    const float delta_u = s.dx != 0 ? 1.0f / std::fabs(s.dx) : inf;
+    const float delta_v = s.dy != 0 ? 1.0f / std::fabs(s.dy) : inf;
+    const float inv_k = 1.0f / (1.0f + model.thickness);
+
+    // The first point of [fa, fb] inside the slab of the triangle of quad (i, j) it lies in.
+    auto piece = [&](float fa, float fb) {
+      if (!(fb > fa)) return -1;
+      const float fm = 0.5f * (fa + fb);
+      const bool upper = (u0 + s.dx * fm - i) >= (v0 + s.dy * fm - j);
+      if (!mesh.has_triangle(i, j, upper)) return -1;
+      const float surf_a =
+          mesh.inverse_depth_at(i, j, upper, u0 + s.dx * fa - i, v0 + s.dy * fa - j);
+      const float surf_b =
+          mesh.inverse_depth_at(i, j, upper, u0 + s.dx * fb - i, v0 + s.dy * fb - j);
+      const float ray_a = s.h0 + (s.h1 - s.h0) * fa, ray_b = s.h0 + (s.h1 - s.h0) * fb;
+      float lo = fa, hi = fb;
+      // Keeps the part of [lo, hi] where the affine r (ra at fa, rb at fb) is >= 0.
+      auto keep_non_negative = [&](float ra, float rb) {
+        if (ra >= 0 && rb >= 0) return true;
+        if (ra < 0 && rb < 0) return false;
+        const float fr = fa + (fb - fa) * (ra / (ra - rb));
+        if (ra >= 0)
+          hi = std::min(hi, fr);
+        else
+          lo = std::max(lo, fr);
+        return lo <= hi;
+      };
+      // Behind the front (1/z_ray <= 1/z_surface), before the back (1/z_ray >= k / z_surface).
+      if (!keep_non_negative(surf_a - ray_a, surf_b - ray_b) ||
+          !keep_non_negative(ray_a - inv_k * surf_a, ray_b - inv_k * surf_b))
+        return -1;
+      float f = lo;
+      if (f >= own_lo && f <= own_hi) {
+        f = own_hi + past_own;
+        if (f > hi) return -1;
+      }
+      return mesh.heaviest_vertex(i, j, upper, u0 + s.dx * f - i, v0 + s.dy * f - j);
+    };
+
+    float f = f_start;
+    const int max_cells = 2 * (mesh.width() + mesh.height()) + 4;
+    for (int cell = 0; cell < max_cells && f < s.f_hi; ++cell) {
+      const float fe = std::min(std::min(next_u, next_v), s.f_hi);
+      if (fe > f) {
+        // The diagonal (i, j)-(i+1, j+1), where u - i = v - j, splits the quad in two.
+        const float fd =
+            s.dx != s.dy
+                ? ((static_cast<float>(i) - u0) - (static_cast<float>(j) - v0)) / (s.dx - s.dy)
+                : inf;
+        int hit;
+        if (fd > f && fd < fe) {
+          hit = piece(f, fd);
+          if (hit < 0) hit = piece(fd, fe);
+        } else {
+          hit = piece(f, fe);
+        }
+        if (hit >= 0) return hit;
+        f = fe;
+      }
+      if (next_u < next_v) {
+        i += step_i;
+        next_u += delta_u;
+      } else {
+        j += step_j;
+        next_v += delta_v;
+      }
+    }
+    return -1;
+  }
+
+  // The part [*lo, *hi] of the segment inside the box [x0, x1] x [y0, y1] (Liang-Barsky);
+  // leaves them unchanged when the segment misses the box.
+  static void clip_to_box(const Segment& s, float x0, float y0, float x1, float y1, float* lo,
+                          float* hi) {
+    float a = -std::numeric_limits<float>::infinity(), b = std::numeric_limits<float>::infinity();
+    auto clip = [&](float p, float q) {
+      if (p == 0) return q >= 0;
+      const float r = q / p;
+      if (p < 0) {
+        if (r > b) return false;
+        a = std::max(a, r);
+      } else {
+        if (r < a) return false;
+        b = std::min(b, r);
+      }
+      return true;
+    };
+    if (clip(-s.dx, s.sx0 - x0) && clip(s.dx, x1 - s.sx0) && clip(-s.dy, s.sy0 - y0) &&
+        clip(s.dy, y1 - s.sy0) && a <= b) {
+      *lo = a;
+      *hi = b;
+    }
   }
 
   // MissMode::kExtend: the surface at the pixel where the ray leaves the screen continues as
@@ -141,9 +261,10 @@ struct Tracer {
     const Vec3d pe = g.camera.unproject(ix + offset_x + 0.5, iy + offset_y + 0.5, ze);
     const float facing = n.x * d.x + n.y * d.y + n.z * d.z;
     if (!(facing < 0)) return -1;
-    const float t = (n.x * (static_cast<float>(pe.x) - o.x) + n.y * (static_cast<float>(pe.y) - o.y) +
-                     n.z * (static_cast<float>(pe.z) - o.z)) /
-                    facing;
+    const float t =
+        (n.x * (static_cast<float>(pe.x) - o.x) + n.y * (static_cast<float>(pe.y) - o.y) +
+         n.z * (static_cast<float>(pe.z) - o.z)) /
+        facing;
     if (!(t > 0) || (settings.max_distance > 0 && t > settings.max_distance)) return -1;
     return iy * width + ix;
   }

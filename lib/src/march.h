@@ -12,6 +12,16 @@
 
 namespace ssgi::detail {
 
+// Ray geometry shared by the march and the Embree reference. A ray heading towards the camera
+// ends where it reaches this fraction of its origin's depth (nothing nearer is in the depth
+// buffer's view); an unlimited ray ends this many origin depths away (its projection is then
+// within a fraction of a pixel of the vanishing point).
+constexpr float kNearFraction = 1e-3f;
+constexpr float kFarFactor = 1e6f;
+// A ray does not hit its own pixel: where it leaves the pixel's square inside a slab, the hit
+// is taken this far (in pixels) past the square's edge.
+constexpr float kPastEdgePx = 1e-3f;
+
 // Where each ray of each pixel ended, kept so that further bounces re-gather without
 // re-marching: the hit pixel's index (y * width + x, data window) or -1 for a miss, and per
 // pixel the number of missing rays and the sum of the environment radiance they saw.
@@ -30,8 +40,7 @@ struct MissLight {
 };
 
 // Marches settings.rays rays per surface pixel and records their ends.
-RayHits march_screen_space(const GBuffer& g, const GiSettings& settings,
-                           const Environment& env);
+RayHits march_screen_space(const GBuffer& g, const GiSettings& settings, const Environment& env);
 
 // Indirect light per pixel: the mean over its rays of `radiance` at the hit pixel, or the
 // environment for a miss. Background pixels get 0.

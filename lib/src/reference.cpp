@@ -20,13 +20,6 @@
 namespace ssgi::detail {
 namespace {
 
-// As in the march: a ray's screen segment ends where it reaches this fraction of its origin's
-// depth when it heads towards the camera, or this many origin depths away when unlimited.
-constexpr float kNearFraction = 1e-3f;
-constexpr float kFarFactor = 1e6f;
-// A ray that leaves its own pixel inside the volume brings the light found this far past the
-// pixel's edge, in pixels: inside the next pixel, where the march's first sample is too.
-constexpr float kPastEdgePx = 1e-3f;
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
 

@@ -47,25 +47,50 @@ class DepthMesh {
  public:
   DepthMesh(const Image& depth, const SurfaceModel& model);
 
+  int width() const { return width_; }
+  int height() const { return height_; }
+
+  // Whether the triangle of quad (i, j) (pixel centres (i, j)..(i+1, j+1)) above the diagonal
+  // (`upper`: corners (i,j) (i+1,j) (i+1,j+1)) or below it ((i,j) (i,j+1) (i+1,j+1)) exists.
+  bool has_triangle(int i, int j, bool upper) const {
+    if (i < 0 || j < 0 || i + 1 >= width_ || j + 1 >= height_) return false;
+    return triangles_[static_cast<std::size_t>(j) * width_ + i] & (upper ? kUpper : kLower);
+  }
+
+  // Inverse depth of that triangle's surface at offsets (fu, fv) from pixel centre (i, j):
+  // barycentric interpolation of the corners' 1/z (exact: the triangle is flat in camera space).
+  float inverse_depth_at(int i, int j, bool upper, float fu, float fv) const {
+    const std::size_t a = static_cast<std::size_t>(j) * width_ + i;
+    const std::size_t b = upper ? a + 1 : a + width_;
+    const float wa = upper ? 1.0f - fu : 1.0f - fv;
+    const float wb = upper ? fu - fv : fv - fu;
+    const float wc = upper ? fv : fu;
+    return wa * inverse_depth_[a] + wb * inverse_depth_[b] + wc * inverse_depth_[a + width_ + 1];
+  }
+
+  // The pixel whose light a hit on that triangle at offsets (fu, fv) brings: the corner with
+  // the largest barycentric weight (ties in the order (i,j), the middle corner, (i+1,j+1)).
+  int heaviest_vertex(int i, int j, bool upper, float fu, float fv) const {
+    const float wa = upper ? 1.0f - fu : 1.0f - fv;
+    const float wb = upper ? fu - fv : fv - fu;
+    const float wc = upper ? fv : fu;
+    const int a = j * width_ + i;
+    if (wa >= wb && wa >= wc) return a;
+    if (wb >= wc) return upper ? a + 1 : a + width_;
+    return a + width_ + 1;
+  }
+
   // The surface at continuous data-window pixel coordinates (sx, sy) (pixel (x, y) has its
   // centre at (x + 0.5, y + 0.5)); false where no triangle covers the point.
   bool surface_at(float sx, float sy, MeshPoint* out) const {
     const float u = sx - 0.5f, v = sy - 0.5f;
     const float fi = std::floor(u), fj = std::floor(v);
     const int i = static_cast<int>(fi), j = static_cast<int>(fj);
-    if (i < 0 || j < 0 || i + 1 >= width_ || j + 1 >= height_) return false;
     const float fu = u - fi, fv = v - fj;
-    // Triangle (i,j) (i+1,j) (i+1,j+1) above the diagonal, (i,j) (i,j+1) (i+1,j+1) below.
     const bool upper = fu >= fv;
-    const std::size_t quad = static_cast<std::size_t>(j) * width_ + i;
-    if (!(triangles_[quad] & (upper ? kUpper : kLower))) return false;
-    const int xb = upper ? i + 1 : i, yb = upper ? j : j + 1;
-    const int a = j * width_ + i, b = yb * width_ + xb, c = a + width_ + 1;
-    const float wa = upper ? 1.0f - fu : 1.0f - fv;
-    const float wb = upper ? fu - fv : fv - fu;
-    const float wc = upper ? fv : fu;
-    out->z = 1.0f / (wa * inverse_depth_[a] + wb * inverse_depth_[b] + wc * inverse_depth_[c]);
-    out->pixel = (wa >= wb && wa >= wc) ? a : (wb >= wc ? b : c);
+    if (!has_triangle(i, j, upper)) return false;
+    out->z = 1.0f / inverse_depth_at(i, j, upper, fu, fv);
+    out->pixel = heaviest_vertex(i, j, upper, fu, fv);
     return true;
   }
 
