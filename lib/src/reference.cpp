@@ -20,7 +20,6 @@
 namespace ssgi::detail {
 namespace {
 
-
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
 Vec3f along(const Vec3f& o, const Vec3f& d, float t) {
@@ -108,27 +107,18 @@ constexpr HalfShape kLowerHalf = {{{0, 0}, {1, 1}, {0, 1}}, {{0, 0, 1}, {0, 1, 1
 
 const HalfShape& shape_of(bool upper) { return upper ? kUpperHalf : kLowerHalf; }
 
-// The pixel of triangle t's vertex with the largest screen-space barycentric weight at (sx, sy):
-// DepthMesh::surface_at's rule (and tie order), applied to the triangle a hit is on, which
-// surface_at might not pick for a point on an edge or a wall.
-int heaviest_vertex(const MeshTriangle& t, float sx, float sy, int width) {
-  const float fu = sx - 0.5f - static_cast<float>(t.i);
-  const float fv = sy - 0.5f - static_cast<float>(t.j);
-  const float wa = t.upper ? 1.0f - fu : 1.0f - fv;
-  const float wb = t.upper ? fu - fv : fv - fu;
-  const float wc = t.upper ? fv : fu;
-  if (wa >= wb && wa >= wc) return t.j * width + t.i;
-  if (wb >= wc) return t.upper ? t.j * width + t.i + 1 : (t.j + 1) * width + t.i;
-  return (t.j + 1) * width + t.i + 1;
-}
-
 // The reference mesh of reference.h in an Embree scene: per surface pixel a front vertex (index
 // = pixel) and a back vertex (pixels + pixel); per mesh triangle its front and back faces and
 // the walls along its boundary edges, all triangles of one geometry.
 class SlabScene {
  public:
-  SlabScene(const GBuffer& g, const SurfaceModel& model, RTCFilterFunctionN filter)
-      : g_(g), model_(model), device_(g.path), width_(g.width()), height_(g.height()) {
+  SlabScene(const GBuffer& g, const DepthMesh& mesh, RTCFilterFunctionN filter)
+      : g_(g),
+        model_(mesh.model()),
+        mesh_(mesh),
+        device_(g.path),
+        width_(g.width()),
+        height_(g.height()) {
     scene_.reset(rtcNewScene(device_.get()));
     device_.check("creating the scene");
     // Adjacent faces share edges: robust traversal keeps rays from slipping between them.
@@ -153,14 +143,7 @@ class SlabScene {
     std::uint32_t v[3];
   };
 
-  bool exists(int i, int j, bool upper) const {
-    if (i < 0 || j < 0 || i + 1 >= width_ || j + 1 >= height_) return false;
-    const HalfShape& s = shape_of(upper);
-    float z[3];
-    for (int k = 0; k < 3; ++k) z[k] = g_.depth.at(0, i + s.corner[k][0], j + s.corner[k][1]);
-    return model_.connected(z[0], z[1]) && model_.connected(z[1], z[2]) &&
-           model_.connected(z[0], z[2]);
-  }
+  bool exists(int i, int j, bool upper) const { return mesh_.has_triangle(i, j, upper); }
 
   // Faces in a fixed order (rows, quads, halves), so that the scene and its primitive ids do
   // not depend on threads.
@@ -239,6 +222,7 @@ class SlabScene {
 
   const GBuffer& g_;
   SurfaceModel model_;
+  const DepthMesh& mesh_;
   EmbreeDevice device_;
   int width_, height_;
   std::unique_ptr<RTCSceneTy, ReleaseScene> scene_;
@@ -298,7 +282,7 @@ class ReferenceTracer {
         screen_{g.camera, static_cast<float>(g.data_window.x0 - g.display_window.x0),
                 static_cast<float>(g.data_window.y0 - g.display_window.y0)},
         tfar_(settings.max_distance > 0 ? static_cast<float>(settings.max_distance) : kInf),
-        scene_(g, model, skip_own_pixel) {}
+        scene_(g, mesh_, skip_own_pixel) {}
 
   // The pixel whose light the ray from `o` along unit `d`, cast from pixel (x, y), brings; -1
   // for a miss.
@@ -335,7 +319,10 @@ class ReferenceTracer {
   int light_at(const MeshTriangle& t, const Vec3f& p) const {
     float sx, sy;
     screen_.project(p, &sx, &sy);
-    return heaviest_vertex(t, sx, sy, g_.width());
+    // surface_at's rule applied to the triangle the hit is on, which surface_at might not pick
+    // for a point on an edge or a wall.
+    return mesh_.heaviest_vertex(t.i, t.j, t.upper, sx - 0.5f - static_cast<float>(t.i),
+                                 sy - 0.5f - static_cast<float>(t.j));
   }
 
   // A ray that met no entry before t_end (it left the volume there, or met nothing) is either
