@@ -4,6 +4,7 @@
 #include "commands.h"
 #include "progress.h"
 #include "run_options.h"
+#include "ssgi/error.h"
 
 namespace ssgi_cli {
 namespace {
@@ -25,6 +26,7 @@ int run_run(int argc, char** argv) {
     print_help();
     return kExitOk;
   }
+  if (o.given.count("spp")) ssgi::throw_usage("--spp is for ssgi reference; ssgi run takes --rays");
   return run_with_progress(o);
 }
 

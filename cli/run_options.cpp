@@ -43,6 +43,7 @@ enum LongOnly : int {
   kDenoiseNormalPower,
   kDenoiseBlur,
   kTemporal,
+  kSpp,
   kSeed,
   kThreads,
   kCompression,
@@ -79,6 +80,7 @@ const option kOptions[] = {
     {"denoise-normal-power", required_argument, nullptr, kDenoiseNormalPower},
     {"denoise-blur", required_argument, nullptr, kDenoiseBlur},
     {"temporal", required_argument, nullptr, kTemporal},
+    {"spp", required_argument, nullptr, kSpp},
     {"seed", required_argument, nullptr, kSeed},
     {"threads", required_argument, nullptr, kThreads},
     {"compression", required_argument, nullptr, kCompression},
@@ -170,6 +172,7 @@ const char* common_options_help() {
          "  --denoise MODE        pyramid or none (default pyramid)\n"
          "  --denoise-radius N, --denoise-sigma-spatial S, --denoise-sigma-depth S,\n"
          "  --denoise-normal-power P, --denoise-blur N   denoise parameters (man ssgi)\n"
+         "  --spp N               ssgi reference only: rays per pixel (default 256)\n"
          "  --temporal MODE       window[:K] (default, K = 2), ema[:ALPHA] (default 0.1) or\n"
          "                        none\n"
          "  --seed N              noise seed (default 0)\n"
@@ -196,8 +199,11 @@ CommonOptions parse_common_options(int argc, char** argv, bool need_output) {
   opterr = 0;
   bool env_color_given = false;
   int c;
-  while ((c = getopt_long(argc, argv, ":o:vqh", kOptions, nullptr)) != -1) {
+  int option_index = -1;
+  while ((c = getopt_long(argc, argv, ":o:vqh", kOptions, &option_index)) != -1) {
     const char* a = optarg;
+    for (const option& known : kOptions)
+      if (known.name != nullptr && known.val == c) o.given.insert(known.name);
     switch (c) {
       case 'o':
         o.run.output = a;
@@ -308,6 +314,9 @@ CommonOptions parse_common_options(int argc, char** argv, bool need_output) {
         break;
       case kTemporal:
         parse_temporal(a, &gi);
+        break;
+      case kSpp:
+        o.spp = static_cast<int>(parse_long("spp", a, 1, 4096));
         break;
       case kSeed:
         gi.seed = static_cast<std::uint32_t>(parse_long("seed", a, 0, 4294967295L));

@@ -2,6 +2,7 @@
 // getopt_long.
 #pragma once
 
+#include <set>
 #include <string>
 
 #include "ssgi/run.h"
@@ -15,6 +16,8 @@ struct CommonOptions {
   bool quiet = false;
   bool help = false;
   std::string command_line;  // the whole invocation, for provenance
+  int spp = 0;               // --spp (ssgi reference), 0 when not given
+  std::set<std::string> given;  // the long names of the options given, e.g. "denoise"
 };
 
 // Parses argv (argv[0] is the subcommand). `need_output` makes -o required. Throws

@@ -113,11 +113,17 @@ Plan make_plan(const SequenceInfo& seq, const GiSettings& s) {
       break;
   }
   plan.reasons.push_back(misses);
-  plan.cache_hits = s.bounces > 1;
+  const bool reference = s.tracer == Tracer::kReference;
+  plan.cache_hits = s.bounces > 1 || reference;
+  const std::string bounces = std::to_string(s.bounces) + " bounce" +
+                              (s.bounces > 1 ? "s (hits kept and re-gathered for each further "
+                                               "bounce)"
+                                             : "");
   plan.reasons.push_back(
-      "march: " + std::to_string(s.rays) + " rays per pixel, up to " + std::to_string(s.max_steps) +
-      " steps, " + std::to_string(s.bounces) + " bounce" +
-      (s.bounces > 1 ? "s (hits kept and re-gathered for each further bounce)" : ""));
+      reference ? "trace: Embree against the depth mesh, " + std::to_string(s.rays) +
+                      " rays per pixel, " + bounces
+                : "march: " + std::to_string(s.rays) + " rays per pixel, exact walk up to " +
+                      std::to_string(s.max_steps) + " pixels, sampled beyond, " + bounces);
   plan.denoise = s.denoise == DenoiseMode::kPyramid;
   plan.reasons.push_back(plan.denoise ? "denoise: bilateral pyramid" : "denoise: none");
   plan.temporal = s.temporal;
