@@ -117,8 +117,7 @@ std::vector<std::vector<float>> read_channels(OIIO::ImageInput& in, int subimage
   return planes;
 }
 
-// Copies role planes into an Image, replacing NaN by 0 and +-inf by +-kHuge, so that nothing
-// downstream sees a non-finite input value (depth has its own rules).
+// Values beyond this are clamped: sums of a few thousand of them stay finite in float.
 constexpr float kHuge = 1e30f;
 
 float finite_or(float v, float nan_value) {
@@ -126,11 +125,22 @@ float finite_or(float v, float nan_value) {
   return std::clamp(v, -kHuge, kHuge);
 }
 
-Image to_image(const std::vector<std::vector<float>>& planes, int w, int h) {
+// Copies role planes into an Image. A NaN or infinite value is a broken sample, not light or
+// colour: it becomes 0 and is counted in `*non_finite`, so that nothing downstream sees it.
+Image to_image(const std::vector<std::vector<float>>& planes, int w, int h,
+               std::size_t* non_finite) {
   Image img(w, h, static_cast<int>(planes.size()));
   for (int c = 0; c < img.channels(); ++c) {
     float* dst = img.plane(c);
-    for (std::size_t p = 0; p < img.plane_size(); ++p) dst[p] = finite_or(planes[c][p], 0.0f);
+    for (std::size_t p = 0; p < img.plane_size(); ++p) {
+      const float v = planes[c][p];
+      if (std::isfinite(v)) {
+        dst[p] = std::clamp(v, -kHuge, kHuge);
+      } else {
+        dst[p] = 0.0f;
+        ++*non_finite;
+      }
+    }
   }
   return img;
 }
@@ -356,6 +366,7 @@ GBuffer read_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
   auto wanted = [&](Role role) { return (roles & role_bit(role)) && seq.layout.has(role); };
 
   const LayoutPreset& preset = seq.layout.preset;
+  std::size_t non_finite = 0;
   if (roles & role_bit(Role::kDepth)) {
     if (!seq.layout.has(Role::kDepth)) throw_input(path, "has no depth channel");
     g.depth = Image(w, h, 1);
@@ -366,13 +377,13 @@ GBuffer read_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
   }
   if (roles & role_bit(Role::kNormal)) {
     if (!seq.layout.has(Role::kNormal)) throw_input(path, "has no normal channels");
-    g.normal = to_image(role_planes(Role::kNormal), w, h);
+    g.normal = to_image(role_planes(Role::kNormal), w, h, &non_finite);
     convert_normals(g.normal, g.depth, preset.normal_space, g.camera, g.display_window,
                     g.data_window);
   }
-  if (wanted(Role::kAlbedo)) g.albedo = to_image(role_planes(Role::kAlbedo), w, h);
+  if (wanted(Role::kAlbedo)) g.albedo = to_image(role_planes(Role::kAlbedo), w, h, &non_finite);
   if (wanted(Role::kDirect)) {
-    g.direct = to_image(role_planes(Role::kDirect), w, h);
+    g.direct = to_image(role_planes(Role::kDirect), w, h, &non_finite);
     if (!preset.direct_includes_albedo) {
       if (g.albedo.empty()) throw_input(path, "direct light excludes albedo but there is none");
       for (int c = 0; c < 3; ++c)
@@ -380,14 +391,18 @@ GBuffer read_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
           g.direct.plane(c)[p] = finite_or(g.direct.plane(c)[p] * g.albedo.plane(c)[p], 0.0f);
     }
   }
-  if (wanted(Role::kEmission)) g.emission = to_image(role_planes(Role::kEmission), w, h);
+  if (wanted(Role::kEmission))
+    g.emission = to_image(role_planes(Role::kEmission), w, h, &non_finite);
   if (wanted(Role::kMotion))
     convert_motion(role_planes(Role::kMotion), preset.motion, g.display_window, w, h, &g);
   if (wanted(Role::kBeauty)) {
     auto beauty = role_planes(Role::kBeauty);
     if (beauty.size() < 4) beauty.emplace_back(static_cast<std::size_t>(w) * h, 1.0f);
-    g.beauty = to_image(beauty, w, h);
+    g.beauty = to_image(beauty, w, h, &non_finite);
   }
+  if (non_finite > 0)
+    log_warning(path + ": " + std::to_string(non_finite) +
+                " NaN or infinite values in normal, albedo, light or beauty channels read as 0");
   return g;
 }
 
