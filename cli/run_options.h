@@ -15,8 +15,8 @@ struct CommonOptions {
   bool verbose = false;
   bool quiet = false;
   bool help = false;
-  std::string command_line;  // the whole invocation, for provenance
-  int spp = 0;               // --spp (ssgi reference), 0 when not given
+  std::string command_line;     // the whole invocation, for provenance
+  int spp = 0;                  // --spp (ssgi reference), 0 when not given
   std::set<std::string> given;  // the long names of the options given, e.g. "denoise"
 };
 

@@ -21,7 +21,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-
 std::string join(const std::vector<std::string>& items, const char* separator) {
   std::string out;
   for (const std::string& item : items) out += (out.empty() ? "" : separator) + item;
@@ -102,7 +101,6 @@ std::string find_depth_channel(const NamedChannels& file) {
   return {};
 }
 
-
 FileChannels probe_channels(OIIO::ImageInput& in) {
   FileChannels file;
   for (int s = 0; in.seek_subimage(s, 0); ++s) {
@@ -164,7 +162,6 @@ Image read_planes(OIIO::ImageInput& in, const std::vector<ChannelRef>& refs, con
   }
   return image;
 }
-
 
 void write_difference(const std::string& path, const Image& diff,
                       const std::vector<std::string>& names, const Box2i& data,

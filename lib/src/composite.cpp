@@ -10,7 +10,9 @@ namespace {
 
 // Keeps outputs finite whatever the inputs: inputs are clamped to +-1e30 by the reader, and
 // sums of a few of them stay far below float's range.
-float finite(float v) { return std::isfinite(v) ? v : (std::isnan(v) ? 0.0f : std::copysign(3e38f, v)); }
+float finite(float v) {
+  return std::isfinite(v) ? v : (std::isnan(v) ? 0.0f : std::copysign(3e38f, v));
+}
 
 }  // namespace
 

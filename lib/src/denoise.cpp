@@ -362,7 +362,6 @@ Image bilateral_upsample(const Image& coarse_light, const Image& coarse_guides, 
   return out;
 }
 
-
 void check_shapes(const Image& noisy, const Image& depth, const Image& normal) {
   const bool same_size = depth.width() == noisy.width() && depth.height() == noisy.height() &&
                          normal.width() == noisy.width() && normal.height() == noisy.height();

@@ -43,7 +43,8 @@ Environment Environment::from_file(const std::string& path, char up) {
 
 std::array<float, 3> Environment::radiance(const Vec3f& dir) const {
   if (map_.empty()) return color_;
-  const Imath::V3f d = up_ == 'z' ? Imath::V3f(dir.y, dir.z, dir.x) : Imath::V3f(dir.x, dir.y, dir.z);
+  const Imath::V3f d =
+      up_ == 'z' ? Imath::V3f(dir.y, dir.z, dir.x) : Imath::V3f(dir.x, dir.y, dir.z);
   if (!(d.length2() > 0)) return {0, 0, 0};
   const int w = map_.width(), h = map_.height();
   const Imath::Box2i window(Imath::V2i(0, 0), Imath::V2i(w - 1, h - 1));

@@ -22,7 +22,9 @@ class Environment {
   // shaped (width = 2 x height) or has fewer than 3 channels.
   static Environment from_file(const std::string& path, char up);
 
-  bool is_black() const { return map_.empty() && color_[0] == 0 && color_[1] == 0 && color_[2] == 0; }
+  bool is_black() const {
+    return map_.empty() && color_[0] == 0 && color_[1] == 0 && color_[2] == 0;
+  }
   bool is_constant() const { return map_.empty(); }
 
   // Radiance arriving from world-space direction `dir` (need not be unit length).

@@ -29,8 +29,7 @@ std::unique_ptr<OIIO::ImageInput> open_exr(const std::string& path) {
 }
 
 Box2i display_window_of(const OIIO::ImageSpec& spec) {
-  return {spec.full_x, spec.full_y, spec.full_x + spec.full_width,
-          spec.full_y + spec.full_height};
+  return {spec.full_x, spec.full_y, spec.full_x + spec.full_width, spec.full_y + spec.full_height};
 }
 
 Box2i data_window_of(const OIIO::ImageSpec& spec) {
@@ -78,12 +77,10 @@ void check_windows(const SequenceInfo& seq, const OIIO::ImageSpec& spec, const s
   if (data.empty()) throw_input(path, "data window is empty (zero pixels)");
   if (display != seq.display_window)
     throw_input(path, "display window " + std::to_string(display.width()) + "x" +
-                          std::to_string(display.height()) +
-                          " differs from the first frame's " +
+                          std::to_string(display.height()) + " differs from the first frame's " +
                           std::to_string(seq.display_window.width()) + "x" +
                           std::to_string(seq.display_window.height()));
-  if (data != seq.data_window)
-    throw_input(path, "data window differs from the first frame's");
+  if (data != seq.data_window) throw_input(path, "data window differs from the first frame's");
 }
 
 // Reads the channels `wanted` (by full name) of one subimage with a single channel-range read:
@@ -149,8 +146,8 @@ Camera find_camera(const InputOptions& options, const OIIO::ImageSpec& spec, int
                    const Box2i& display, double pixel_aspect, const std::string& path) {
   if (!options.camera.sidecar.empty())
     return detail::camera_from_sidecar(options.camera.sidecar, frame, display);
-  if (options.camera.hfov_deg > 0) return camera_from_fov(options.camera.hfov_deg, display,
-                                                          pixel_aspect);
+  if (options.camera.hfov_deg > 0)
+    return camera_from_fov(options.camera.hfov_deg, display, pixel_aspect);
   if (auto camera = detail::camera_from_header(spec, display, path)) return *camera;
   throw_input(path,
               "no camera: the header has no worldToCamera/worldToNDC; give --fov or --camera");
@@ -208,8 +205,8 @@ void convert_normals(Image& normal, const Image& depth, NormalSpace space, const
              n.x * inv.m[1][0] + n.y * inv.m[1][1] + n.z * inv.m[1][2],
              n.x * inv.m[2][0] + n.y * inv.m[2][1] + n.z * inv.m[2][2]};
       }
-      const Vec3d view = camera.view_dir(x + data.x0 - display.x0 + 0.5,
-                                         y + data.y0 - display.y0 + 0.5);
+      const Vec3d view =
+          camera.view_dir(x + data.x0 - display.x0 + 0.5, y + data.y0 - display.y0 + 0.5);
       const double len = std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
       if (!(len > 1e-6) || !std::isfinite(len)) {
         n = {-view.x, -view.y, -view.z};
@@ -372,8 +369,8 @@ GBuffer read_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
     g.depth = Image(w, h, 1);
     auto depth = role_planes(Role::kDepth);
     std::copy(depth[0].begin(), depth[0].end(), g.depth.plane(0));
-    convert_depth(g.depth, preset.depth_kind, preset.background_depth, g.camera,
-                  g.display_window, g.data_window);
+    convert_depth(g.depth, preset.depth_kind, preset.background_depth, g.camera, g.display_window,
+                  g.data_window);
   }
   if (roles & role_bit(Role::kNormal)) {
     if (!seq.layout.has(Role::kNormal)) throw_input(path, "has no normal channels");

@@ -20,12 +20,11 @@ namespace fs = std::filesystem;
 
 constexpr float kHalfMax = 65504.0f;
 
-
 // One output channel: its name, pixel format and where its data window values come from.
 struct OutChannel {
   std::string name;
   OIIO::TypeDesc format;
-  const float* source = nullptr;          // our planes
+  const float* source = nullptr;              // our planes
   std::shared_ptr<std::vector<float>> owned;  // passthrough planes
 };
 
@@ -68,20 +67,27 @@ std::vector<OutChannel> read_passthrough(const std::string& path, const Box2i& d
 // Header attributes worth keeping from the input: everything but what describes the file's
 // own structure, which the writer sets anew.
 bool keep_attribute(const std::string& name) {
-  static const std::set<std::string> kStructural = {
-      "compression", "oiio:subimages", "oiio:subimagename", "openexr:chunkCount",
-      "oiio:BitsPerSample", "openexr:dwaCompressionLevel", "openexr:lineOrder", "name",
-      "type", "version", "chunkCount", "tiles"};
+  static const std::set<std::string> kStructural = {"compression",
+                                                    "oiio:subimages",
+                                                    "oiio:subimagename",
+                                                    "openexr:chunkCount",
+                                                    "oiio:BitsPerSample",
+                                                    "openexr:dwaCompressionLevel",
+                                                    "openexr:lineOrder",
+                                                    "name",
+                                                    "type",
+                                                    "version",
+                                                    "chunkCount",
+                                                    "tiles"};
   return kStructural.count(name) == 0;
 }
-
 
 }  // namespace
 
 std::string parse_compression(const std::string& spec) {
   const auto colon = spec.find(':');
   const std::string name = spec.substr(0, colon);
-  static const std::set<std::string> kKnown = {"none", "rle",  "zips", "zip",  "piz",
+  static const std::set<std::string> kKnown = {"none",  "rle", "zips", "zip",  "piz",
                                                "pxr24", "b44", "b44a", "dwaa", "dwab"};
   if (!kKnown.count(name))
     throw_usage("unknown --compression '" + spec +
@@ -118,8 +124,8 @@ void write_frame(const std::string& path, const GBuffer& frame,
   for (const OutputLayer& layer : layers) {
     for (std::size_t c = 0; c < layer.suffixes.size(); ++c) {
       OutChannel ch;
-      ch.name = options.layer_prefix + (layer.name.empty() ? "" : layer.name + ".") +
-                layer.suffixes[c];
+      ch.name =
+          options.layer_prefix + (layer.name.empty() ? "" : layer.name + ".") + layer.suffixes[c];
       ch.format = our_format;
       ch.source = layer.image->plane(static_cast<int>(c));
       ours.insert(ch.name);
@@ -131,8 +137,10 @@ void write_frame(const std::string& path, const GBuffer& frame,
     for (OutChannel& ch : read_passthrough(frame.path, data)) {
       if (ours.count(ch.name)) {
         if (options.warn_collisions && !warned)
-          log_warning(frame.path + ": input channels that share a name with ssgi's are kept as "
-                      "input.<name> (e.g. input." + ch.name + ")");
+          log_warning(frame.path +
+                      ": input channels that share a name with ssgi's are kept as "
+                      "input.<name> (e.g. input." +
+                      ch.name + ")");
         warned = true;
         ch.name = "input." + ch.name;
       }

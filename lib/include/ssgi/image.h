@@ -48,9 +48,7 @@ class Image {
     return data_.data() + plane_size() * c;
   }
   float& at(int c, int x, int y) { return plane(c)[static_cast<std::size_t>(y) * width_ + x]; }
-  float at(int c, int x, int y) const {
-    return plane(c)[static_cast<std::size_t>(y) * width_ + x];
-  }
+  float at(int c, int x, int y) const { return plane(c)[static_cast<std::size_t>(y) * width_ + x]; }
 
   std::vector<float>& data() { return data_; }
   const std::vector<float>& data() const { return data_; }

@@ -18,14 +18,14 @@ constexpr RoleMask role_bit(Role role) { return 1u << static_cast<int>(role); }
 
 // What the user said about the input sequence.
 struct InputOptions {
-  std::string pattern;                          // e.g. "shot.####.exr"
-  std::string frames;                           // --frames; empty: the range in the pattern,
-                                                // else every frame on disk
-  bool skip_missing = false;                    // --skip-missing
-  std::string layout;                           // --layout; empty: detect
-  std::vector<std::string> channel_overrides;   // --channel ROLE=NAME
-  std::string depth_kind;                       // --depth-kind; empty: the preset's
-  CameraOptions camera;                         // --fov, --camera
+  std::string pattern;                         // e.g. "shot.####.exr"
+  std::string frames;                          // --frames; empty: the range in the pattern,
+                                               // else every frame on disk
+  bool skip_missing = false;                   // --skip-missing
+  std::string layout;                          // --layout; empty: detect
+  std::vector<std::string> channel_overrides;  // --channel ROLE=NAME
+  std::string depth_kind;                      // --depth-kind; empty: the preset's
+  CameraOptions camera;                        // --fov, --camera
 };
 
 // A sequence as found on disk, probed from its first frame.
@@ -35,8 +35,8 @@ struct SequenceInfo {
   std::vector<int> frames_on_disk;  // every frame the pattern matches, ascending
   Box2i display_window;             // of the first frame, absolute EXR coordinates
   Box2i data_window;
-  FileChannels channels;            // of the first frame
-  Layout layout;                    // resolved against the first frame
+  FileChannels channels;  // of the first frame
+  Layout layout;          // resolved against the first frame
   double pixel_aspect = 1.0;
 };
 
@@ -75,7 +75,7 @@ struct WriteOptions {
   bool passthrough = true;          // copy the input's channels
   std::string layer_prefix;         // --layer-prefix, with its trailing '.'
   std::vector<std::pair<std::string, std::string>> provenance;  // extra string attributes
-  bool warn_collisions = true;      // warn when an input channel is renamed to input.<name>
+  bool warn_collisions = true;  // warn when an input channel is renamed to input.<name>
 };
 
 // Validates --compression (zip|zips|piz|rle|pxr24|b44|b44a|dwaa[:level]|dwab[:level]|none) and

@@ -52,8 +52,8 @@ enum class Tracer { kScreenSpace, kReference };
 // Everything that decides the GI result of a frame.
 struct GiSettings {
   Tracer tracer = Tracer::kScreenSpace;
-  int rays = 8;           // hemisphere rays per pixel and bounce
-  int max_steps = 64;     // march samples per ray at most
+  int rays = 8;        // hemisphere rays per pixel and bounce
+  int max_steps = 64;  // march samples per ray at most
   // Longest ray, in camera-space scene units; 0: until the ray leaves the screen.
   double max_distance = 0;
   // Surface model (lib/src/surface_model.h): a depth pixel is a slab from its depth z to
@@ -73,8 +73,8 @@ struct GiSettings {
   DenoiseMode denoise = DenoiseMode::kPyramid;
   DenoiseSettings denoise_settings;
   TemporalMode temporal = TemporalMode::kWindow;
-  int temporal_radius = 2;     // window: +-K frames
-  float ema_alpha = 0.1f;      // EMA: weight of the current frame
+  int temporal_radius = 2;  // window: +-K frames
+  float ema_alpha = 0.1f;   // EMA: weight of the current frame
   std::uint32_t seed = 0;
 };
 
