@@ -10,26 +10,17 @@
 #include <string>
 #include <vector>
 
+#include "fixture_frame.h"
 #include "gtest/gtest.h"
 #include "ssgi/io.h"
 
 namespace ssgi {
 namespace {
 
-const std::string kData = SSGI_TESTDATA_DIR;
+using Frame = test_fixtures::FixtureFrame;
 
-struct Frame {
-  SequenceInfo seq;
-  GBuffer g;
-};
-
-Frame load(const std::string& pattern, const GiSettings& settings, int frame = 1) {
-  InputOptions in;
-  in.pattern = kData + "/" + pattern;
-  Frame f;
-  f.seq = open_sequence(in);
-  f.g = read_gbuffer(f.seq, frame, make_plan(f.seq, settings).roles, in);
-  return f;
+Frame load(const std::string& pattern, const GiSettings& settings) {
+  return test_fixtures::load_fixture(pattern, settings);
 }
 
 FrameResult run(const Frame& f, const GiSettings& settings) {

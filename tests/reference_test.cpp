@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "directions.h"
+#include "fixture_frame.h"
 #include "ssgi/compare.h"
 #include "ssgi/io.h"
 #include "ssgi/pipeline.h"
@@ -22,20 +23,10 @@
 namespace ssgi {
 namespace {
 
-const std::string kData = SSGI_TESTDATA_DIR;
-
-struct Frame {
-  SequenceInfo seq;
-  GBuffer g;
-};
+using Frame = test_fixtures::FixtureFrame;
 
 Frame load(const std::string& pattern, const GiSettings& settings) {
-  InputOptions in;
-  in.pattern = kData + "/" + pattern;
-  Frame f;
-  f.seq = open_sequence(in);
-  f.g = read_gbuffer(f.seq, f.seq.frames.front(), make_plan(f.seq, settings).roles, in);
-  return f;
+  return test_fixtures::load_fixture(pattern, settings);
 }
 
 Image indirect(const Frame& f, const GiSettings& settings) {

@@ -272,24 +272,34 @@ struct Tracer {
   // Calls on_ray(k, hit_index, direction) for each ray of surface pixel (x, y).
   template <typename OnRay>
   void trace_pixel(int x, int y, const OnRay& on_ray) const {
-    const float z = g.depth.at(0, x, y);
-    const int px = x + offset_x, py = y + offset_y;
-    const Vec3d p = g.camera.unproject(px + 0.5, py + 0.5, z);
-    const Vec3f n{g.normal.at(0, x, y), g.normal.at(1, x, y), g.normal.at(2, x, y)};
-    const float off = static_cast<float>(settings.start_offset) * z;
-    const Vec3f o{static_cast<float>(p.x) + n.x * off, static_cast<float>(p.y) + n.y * off,
-                  static_cast<float>(p.z) + n.z * off};
-    const PixelNoise noise = pixel_noise(px, py, g.frame, settings.seed);
+    const PixelRays rays(g, settings, x, y);
     for (int k = 0; k < settings.rays; ++k) {
-      float u1, u2, jitter;
-      ray_sample(noise, k, &u1, &u2, &jitter);
-      const Vec3f d = cosine_hemisphere(n, u1, u2);
-      on_ray(k, march_ray(o, d, jitter, x, y), d);
+      float jitter;
+      const Vec3f d = rays.direction(k, &jitter);
+      on_ray(k, march_ray(rays.origin(), d, jitter, x, y), d);
     }
   }
 };
 
 }  // namespace
+
+PixelRays::PixelRays(const GBuffer& g, const GiSettings& settings, int x, int y) {
+  const int px = x + g.data_window.x0 - g.display_window.x0;
+  const int py = y + g.data_window.y0 - g.display_window.y0;
+  const float z = g.depth.at(0, x, y);
+  const Vec3d p = g.camera.unproject(px + 0.5, py + 0.5, z);
+  normal_ = {g.normal.at(0, x, y), g.normal.at(1, x, y), g.normal.at(2, x, y)};
+  const float off = static_cast<float>(settings.start_offset) * z;
+  origin_ = {static_cast<float>(p.x) + normal_.x * off, static_cast<float>(p.y) + normal_.y * off,
+             static_cast<float>(p.z) + normal_.z * off};
+  noise_ = pixel_noise(px, py, g.frame, settings.seed);
+}
+
+Vec3f PixelRays::direction(int k, float* jitter) const {
+  float u1, u2;
+  ray_sample(noise_, k, &u1, &u2, jitter);
+  return cosine_hemisphere(normal_, u1, u2);
+}
 
 RayHits march_screen_space(const GBuffer& g, const GiSettings& settings, const Environment& env) {
   const Tracer tracer(g, settings, env);

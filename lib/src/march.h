@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "directions.h"
 #include "environment.h"
 #include "ssgi/gbuffer.h"
 #include "ssgi/settings.h"
@@ -21,6 +22,22 @@ constexpr float kFarFactor = 1e6f;
 // A ray does not hit its own pixel: where it leaves the pixel's square inside a slab, the hit
 // is taken this far (in pixels) past the square's edge.
 constexpr float kPastEdgePx = 1e-3f;
+
+// The hemisphere rays of surface pixel (x, y) (data window): the origin is the pixel centre at
+// its depth, offset along the normal by start_offset x depth; ray k's direction and march
+// jitter come from the pixel's noise. The march and the Embree reference both use it, so ray k
+// of one is ray k of the other.
+class PixelRays {
+ public:
+  PixelRays(const GBuffer& g, const GiSettings& settings, int x, int y);
+  const Vec3f& origin() const { return origin_; }
+  // Ray k's unit direction; its march jitter in [0, 1) in *jitter.
+  Vec3f direction(int k, float* jitter) const;
+
+ private:
+  Vec3f origin_, normal_;
+  PixelNoise noise_;
+};
 
 // Where each ray of each pixel ended, kept so that further bounces re-gather without
 // re-marching: the hit pixel's index (y * width + x, data window) or -1 for a miss, and per

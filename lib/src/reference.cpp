@@ -389,28 +389,18 @@ class MissRadiance {
   Mat4d camera_to_world_;
 };
 
-// Traces pixel (x, y)'s rays into its slice of `hits`. They are the march's rays (march.cpp,
-// trace_pixel): ray k here is ray k there.
+// Traces pixel (x, y)'s rays into its slice of `hits`: the march's rays (PixelRays).
 void trace_pixel(const GBuffer& g, const GiSettings& settings, const ReferenceTracer& tracer,
                  const MissRadiance& miss_radiance, bool black_env, int x, int y, RayHits* hits) {
-  const int px = x + g.data_window.x0 - g.display_window.x0;
-  const int py = y + g.data_window.y0 - g.display_window.y0;
-  const float z = g.depth.at(0, x, y);
-  const Vec3d c = g.camera.unproject(px + 0.5, py + 0.5, z);
-  const Vec3f n{g.normal.at(0, x, y), g.normal.at(1, x, y), g.normal.at(2, x, y)};
-  const float off = static_cast<float>(settings.start_offset) * z;
-  const Vec3f o{static_cast<float>(c.x) + n.x * off, static_cast<float>(c.y) + n.y * off,
-                static_cast<float>(c.z) + n.z * off};
-  const PixelNoise noise = pixel_noise(px, py, g.frame, settings.seed);
+  const PixelRays rays(g, settings, x, y);
   const std::size_t pixel = static_cast<std::size_t>(y) * g.width() + x;
   std::int32_t* out = &hits->hit[pixel * hits->rays];
   float env_sum[3] = {0, 0, 0};
   int misses = 0;
   for (int k = 0; k < hits->rays; ++k) {
-    float u1, u2, jitter;
-    ray_sample(noise, k, &u1, &u2, &jitter);
-    const Vec3f d = cosine_hemisphere(n, u1, u2);
-    out[k] = tracer.trace(o, d, x, y);
+    float jitter;  // the march's; Embree needs none
+    const Vec3f d = rays.direction(k, &jitter);
+    out[k] = tracer.trace(rays.origin(), d, x, y);
     if (out[k] >= 0) continue;
     ++misses;
     if (black_env) continue;
