@@ -549,7 +549,7 @@ TEST_F(Cli, TemporalWindowGivesTheSameBitsInAnyChunking) {
       char frame[16];
       std::snprintf(frame, sizeof frame, ".%04d.exr", f);
       const ExrImage whole = read_exr(path(name + "_whole" + frame));
-      for (const std::string& run : {"_chunk", "_single"}) {
+      for (const std::string run : {"_chunk", "_single"}) {
         const ExrImage other = read_exr(path(name + run + frame));
         for (const std::string& c : kOurChannels) {
           const std::vector<float>& a = whole.planes.at(c);
@@ -560,6 +560,32 @@ TEST_F(Cli, TemporalWindowGivesTheSameBitsInAnyChunking) {
       }
     }
   }
+}
+
+TEST_F(Cli, ReferenceWritesWhatRunWritesAndComparesWithIt) {
+  // The lone plane sees only the environment: the reference's indirect light is exactly the
+  // environment colour, and `compare` against the same file from `run` passes a loose threshold
+  // (both see only the environment) and exits 0; the reference's own flags are checked.
+  const std::string in = testdata("plane/plane.0001.exr");
+  CliResult r = run_ssgi({"reference", in, "-o", path("ref.exr"), "--spp", "16", "--miss", "env",
+                          "--env-color", "0.25", "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const ExrImage ref = read_exr(path("ref.exr"));
+  for (const std::string& c : kOurChannels) EXPECT_EQ(ref.planes.count(c), 1u) << c;
+  const std::vector<float>& depth = ref.planes.at("ViewLayer.Depth.Z");
+  for (std::size_t p = 0; p < depth.size(); ++p) {
+    if (depth[p] < 1e9f) ASSERT_FLOAT_EQ(ref.planes.at("indirect.G")[p], 0.25f) << p;
+  }
+  r = run_ssgi({"run", in, "-o", path("run.exr"), "--rays", "4", "--miss", "env", "--env-color",
+                "0.25", "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run_ssgi(
+      {"compare", "--channels", "indirect", "--fail", "1e-4", path("run.exr"), path("ref.exr")});
+  EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+  expect_usage_error(run_ssgi({"reference", in, "-o", path("x.exr"), "--rays", "4"}), "reference",
+                     "ssgi reference takes --spp, not --rays");
+  expect_usage_error(run_ssgi({"run", in, "-o", path("x.exr"), "--spp", "4"}), "run",
+                     "--spp is for ssgi reference; ssgi run takes --rays");
 }
 
 TEST_F(Cli, FramesOptionAndRangeInNameSelectFramesToWrite) {
