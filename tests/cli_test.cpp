@@ -574,7 +574,9 @@ TEST_F(Cli, ReferenceWritesWhatRunWritesAndComparesWithIt) {
   for (const std::string& c : kOurChannels) EXPECT_EQ(ref.planes.count(c), 1u) << c;
   const std::vector<float>& depth = ref.planes.at("ViewLayer.Depth.Z");
   for (std::size_t p = 0; p < depth.size(); ++p) {
-    if (depth[p] < 1e9f) ASSERT_FLOAT_EQ(ref.planes.at("indirect.G")[p], 0.25f) << p;
+    if (depth[p] < 1e9f) {
+      ASSERT_FLOAT_EQ(ref.planes.at("indirect.G")[p], 0.25f) << p;
+    }
   }
   r = run_ssgi({"run", in, "-o", path("run.exr"), "--rays", "4", "--miss", "env", "--env-color",
                 "0.25", "-q"});
