@@ -1,5 +1,6 @@
 // ssgi info: what a sequence holds and what `ssgi run` would do with it.
 #include <cstdio>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -12,6 +13,8 @@
 
 namespace ssgi_cli {
 namespace {
+
+using Json = nlohmann::ordered_json;
 
 void print_help() {
   std::printf(
@@ -41,31 +44,63 @@ std::string window_string(const ssgi::Box2i& b) {
          std::to_string(b.x1 - 1) + "," + std::to_string(b.y1 - 1) + ")";
 }
 
-}  // namespace
+// What `info` found, gathered once and printed as text or JSON.
+struct Report {
+  std::vector<std::string> role_channels[ssgi::kRoleCount];  // "part:name" in multi-part files
+  struct FrameCamera {
+    int frame;
+    std::optional<ssgi::Camera> camera;
+    std::string error;
+  };
+  std::vector<FrameCamera> cameras;
+  std::optional<ssgi::Plan> plan;
+  std::optional<ssgi::Error> problem;  // the first input problem, reported last
+};
 
-int run_info(int argc, char** argv) {
-  const CommonOptions o = parse_common_options(argc, argv, /*need_output=*/false);
-  if (o.help) {
-    print_help();
-    return kExitOk;
+Json window_json(const ssgi::Box2i& b) {
+  return Json{{"x_min", b.x0}, {"y_min", b.y0}, {"x_max", b.x1 - 1}, {"y_max", b.y1 - 1}};
+}
+
+void print_json(const ssgi::InputOptions& in, const ssgi::SequenceInfo& seq, const Report& r) {
+  const ssgi::LayoutPreset& preset = seq.layout.preset;
+  Json channels = Json::object();
+  for (int k = 0; k < ssgi::kRoleCount; ++k)
+    channels[ssgi::role_name(static_cast<ssgi::Role>(k))] = r.role_channels[k];
+  Json cameras = Json::array();
+  for (const Report::FrameCamera& c : r.cameras) {
+    if (c.camera)
+      cameras.push_back({{"frame", c.frame},
+                         {"source", c.camera->source},
+                         {"hfov_deg", c.camera->hfov_deg(seq.display_window.width())}});
+    else
+      cameras.push_back({{"frame", c.frame}, {"error", c.error}});
   }
-  install_log_handler(o.verbose, o.quiet);
-  const ssgi::ThreadLimit threads(o.threads);
-  const ssgi::InputOptions& in = o.run.input;
-  const ssgi::SequenceInfo seq = ssgi::open_sequence(in);
+  Json out = {
+      {"sequence", in.pattern},
+      {"frames", seq.frames},
+      {"frames_on_disk", seq.frames_on_disk},
+      {"resolution", {seq.display_window.width(), seq.display_window.height()}},
+      {"display_window", window_json(seq.display_window)},
+      {"data_window", window_json(seq.data_window)},
+      {"layout",
+       {{"name", preset.name},
+        {"renderer", preset.renderer},
+        {"detected_because", seq.layout.detected_because},
+        {"depth_kind", ssgi::depth_kind_name(preset.depth_kind)},
+        {"background_depth", preset.background_depth},
+        {"normal_space", ssgi::normal_space_name(preset.normal_space)},
+        {"direct_includes_albedo", preset.direct_includes_albedo},
+        {"channels", channels}}},
+      {"cameras", cameras},
+      {"plan", r.plan ? Json(r.plan->reasons) : Json(nullptr)},
+      {"error", r.problem ? Json(r.problem->what()) : Json(nullptr)},
+  };
+  std::printf("%s\n", out.dump(2).c_str());
+}
+
+void print_text(const ssgi::InputOptions& in, const ssgi::SequenceInfo& seq, const Report& r) {
   const ssgi::Layout& layout = seq.layout;
   const ssgi::LayoutPreset& preset = layout.preset;
-  // Bad option values fail before anything is printed; input problems (no camera, no direct
-  // light) are reported in their place and the report goes on, then exit with the first one.
-  std::optional<ssgi::Error> problem;
-  std::optional<ssgi::Plan> plan;
-  try {
-    plan = ssgi::make_plan(seq, o.run.gi);
-  } catch (const ssgi::Error& e) {
-    if (e.kind() == ssgi::ErrorKind::kUsage) throw;
-    problem = e;
-  }
-
   std::printf("sequence:      %s\n", in.pattern.c_str());
   std::printf("frames:        %s (%zu to write, %zu on disk)\n", frame_ranges(seq.frames).c_str(),
               seq.frames.size(), seq.frames_on_disk.size());
@@ -83,35 +118,71 @@ int run_info(int argc, char** argv) {
       ssgi::normal_space_name(preset.normal_space),
       preset.direct_includes_albedo ? "includes" : "excludes");
   std::printf("channels:\n");
-  for (int r = 0; r < ssgi::kRoleCount; ++r) {
-    const auto role = static_cast<ssgi::Role>(r);
+  for (int k = 0; k < ssgi::kRoleCount; ++k) {
     std::string names;
-    for (const ssgi::ChannelRef& c : layout.channels(role)) {
-      if (!names.empty()) names += ", ";
-      const std::string& part = seq.channels.subimage_names[c.subimage];
-      names += (seq.channels.subimage_names.size() > 1 && !part.empty() ? part + ":" : "") + c.name;
-    }
-    std::printf("  %-10s   %s\n", ssgi::role_name(role), names.empty() ? "-" : names.c_str());
+    for (const std::string& c : r.role_channels[k]) names += (names.empty() ? "" : ", ") + c;
+    std::printf("  %-10s   %s\n", ssgi::role_name(static_cast<ssgi::Role>(k)),
+                names.empty() ? "-" : names.c_str());
   }
   std::printf("cameras:\n");
-  for (int f : seq.frames) {
-    try {
-      const ssgi::Camera cam = ssgi::read_camera(seq, f, in);
-      std::printf("  frame %-6d %s, horizontal fov %.4f deg\n", f, cam.source.c_str(),
-                  cam.hfov_deg(seq.display_window.width()));
-    } catch (const ssgi::Error& e) {
-      std::printf("  frame %-6d none: %s\n", f, e.what());
-      if (!problem) problem = e;
-    }
+  for (const Report::FrameCamera& c : r.cameras) {
+    if (c.camera)
+      std::printf("  frame %-6d %s, horizontal fov %.4f deg\n", c.frame, c.camera->source.c_str(),
+                  c.camera->hfov_deg(seq.display_window.width()));
+    else
+      std::printf("  frame %-6d none: %s\n", c.frame, c.error.c_str());
   }
   std::printf("plan:\n");
-  if (plan) {
-    for (const std::string& reason : plan->reasons) std::printf("  %s\n", reason.c_str());
+  if (r.plan) {
+    for (const std::string& reason : r.plan->reasons) std::printf("  %s\n", reason.c_str());
   } else {
-    std::printf("  cannot run: %s\n", problem->what());
+    std::printf("  cannot run: %s\n", r.problem->what());
   }
+}
+
+}  // namespace
+
+int run_info(int argc, char** argv) {
+  const CommonOptions o = parse_common_options(argc, argv, /*need_output=*/false);
+  if (o.help) {
+    print_help();
+    return kExitOk;
+  }
+  if (o.given.count("spp")) ssgi::throw_usage("--spp is for ssgi reference");
+  install_log_handler(o.verbose, o.quiet);
+  const ssgi::ThreadLimit threads(o.threads);
+  const ssgi::InputOptions& in = o.run.input;
+  const ssgi::SequenceInfo seq = ssgi::open_sequence(in);
+  // Bad option values fail before anything is printed; input problems (no camera, no direct
+  // light) are reported in their place and the report goes on, then exit with the first one.
+  Report r;
+  try {
+    r.plan = ssgi::make_plan(seq, o.run.gi);
+  } catch (const ssgi::Error& e) {
+    if (e.kind() == ssgi::ErrorKind::kUsage) throw;
+    r.problem = e;
+  }
+  const bool multipart = seq.channels.subimage_names.size() > 1;
+  for (int k = 0; k < ssgi::kRoleCount; ++k) {
+    for (const ssgi::ChannelRef& c : seq.layout.channels(static_cast<ssgi::Role>(k))) {
+      const std::string& part = seq.channels.subimage_names[c.subimage];
+      r.role_channels[k].push_back((multipart && !part.empty() ? part + ":" : "") + c.name);
+    }
+  }
+  for (int f : seq.frames) {
+    try {
+      r.cameras.push_back({f, ssgi::read_camera(seq, f, in), {}});
+    } catch (const ssgi::Error& e) {
+      r.cameras.push_back({f, std::nullopt, e.what()});
+      if (!r.problem) r.problem = e;
+    }
+  }
+  if (o.json)
+    print_json(in, seq, r);
+  else
+    print_text(in, seq, r);
   std::fflush(stdout);
-  if (problem) throw *problem;
+  if (r.problem) throw *r.problem;
   return kExitOk;
 }
 

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "commands.h"
+#include "ssgi/error.h"
 #include "ssgi/threads.h"
 
 namespace ssgi_cli {
@@ -20,6 +21,7 @@ int exit_code_for(ssgi::ErrorKind kind) {
 }  // namespace
 
 int run_with_progress(const CommonOptions& o) {
+  if (o.json) ssgi::throw_usage("--json is for ssgi info");
   install_log_handler(o.verbose, o.quiet);
   warn_about_options(o);
   const ssgi::ThreadLimit threads(o.threads);

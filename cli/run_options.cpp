@@ -44,6 +44,7 @@ enum LongOnly : int {
   kDenoiseBlur,
   kTemporal,
   kSpp,
+  kJson,
   kSeed,
   kThreads,
   kCompression,
@@ -81,6 +82,7 @@ const option kOptions[] = {
     {"denoise-blur", required_argument, nullptr, kDenoiseBlur},
     {"temporal", required_argument, nullptr, kTemporal},
     {"spp", required_argument, nullptr, kSpp},
+    {"json", no_argument, nullptr, kJson},
     {"seed", required_argument, nullptr, kSeed},
     {"threads", required_argument, nullptr, kThreads},
     {"compression", required_argument, nullptr, kCompression},
@@ -173,6 +175,7 @@ const char* common_options_help() {
          "  --denoise-radius N, --denoise-sigma-spatial S, --denoise-sigma-depth S,\n"
          "  --denoise-normal-power P, --denoise-blur N   denoise parameters (man ssgi)\n"
          "  --spp N               ssgi reference only: rays per pixel (default 256)\n"
+         "  --json                ssgi info only: the report as JSON on stdout\n"
          "  --temporal MODE       window[:K] (default, K = 2), ema[:ALPHA] (default 0.1) or\n"
          "                        none\n"
          "  --seed N              noise seed (default 0)\n"
@@ -317,6 +320,9 @@ CommonOptions parse_common_options(int argc, char** argv, bool need_output) {
         break;
       case kSpp:
         o.spp = static_cast<int>(parse_long("spp", a, 1, 4096));
+        break;
+      case kJson:
+        o.json = true;
         break;
       case kSeed:
         gi.seed = static_cast<std::uint32_t>(parse_long("seed", a, 0, 4294967295L));

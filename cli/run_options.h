@@ -17,6 +17,7 @@ struct CommonOptions {
   bool help = false;
   std::string command_line;     // the whole invocation, for provenance
   int spp = 0;                  // --spp (ssgi reference), 0 when not given
+  bool json = false;            // --json (ssgi info)
   std::set<std::string> given;  // the long names of the options given, e.g. "denoise"
 };
 

@@ -14,6 +14,7 @@
 #include <fstream>
 #include <iterator>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
 #include <string>
@@ -299,6 +300,25 @@ TEST_F(Cli, InfoReportsTheSampleSequence) {
   ASSERT_NE(plan, std::string::npos);
   EXPECT_NE(r.out.find("  march: ", plan), std::string::npos);
   EXPECT_NE(r.out.find("  composite: ", plan), std::string::npos);
+}
+
+TEST_F(Cli, InfoJsonIsTheSameReportForMachines) {
+  // The report as one JSON document on stdout: layout, channels, cameras and plan; run and
+  // reference refuse --json.
+  const std::string in = testdata("sample/sample.####.exr");
+  const CliResult r = run_ssgi({"info", in, "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["layout"]["name"], "blender");
+  EXPECT_EQ(j["layout"]["channels"]["depth"][0], "ViewLayer.Depth.Z");
+  EXPECT_EQ(j["frames"].size(), 6u);
+  ASSERT_EQ(j["cameras"].size(), 6u);
+  EXPECT_NEAR(j["cameras"][2]["hfov_deg"].get<double>(), 65.0, 1e-4);
+  EXPECT_EQ(j["data_window"]["x_max"], 95);
+  EXPECT_FALSE(j["plan"].empty());
+  EXPECT_TRUE(j["error"].is_null());
+  expect_usage_error(run_ssgi({"run", in, "-o", path("o.####.exr"), "--json"}), "run",
+                     "--json is for ssgi info");
 }
 
 TEST_F(Cli, InfoDetectsEveryLayoutPreset) {
