@@ -262,9 +262,10 @@ SequenceInfo open_sequence(const InputOptions& options) {
     seq.pattern = pattern_for_single_file(options.pattern, &frames_in_name);
     if (!fs::exists(options.pattern)) throw_io(options.pattern, "no such file");
   }
-  seq.frames_on_disk = seq.pattern.has_frame_field && frames_in_name.size() != 1
-                           ? find_frames_on_disk(seq.pattern)
-                           : std::vector<int>();
+  // The whole shot on disk, also for one named file of it (`shot.0005.exr`): the temporal
+  // window reads its neighbours, so a frame has the same bits however the shot is split.
+  seq.frames_on_disk = seq.pattern.has_frame_field ? find_frames_on_disk(seq.pattern)
+                                                   : std::vector<int>();
   std::vector<int> wanted;
   if (!options.frames.empty())
     wanted = parse_frame_list(options.frames);
