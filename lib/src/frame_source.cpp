@@ -13,6 +13,22 @@ namespace {
 // fraction of the largest indirect value (see ema_preroll_frames).
 constexpr double kEmaPrerollBound = 1e-3;
 
+// What the temporal stage reads of a neighbour: its geometry, camera and motion; the passes
+// only the composite needs are left out.
+std::shared_ptr<const GBuffer> geometry_of(const GBuffer& g) {
+  auto out = std::make_shared<GBuffer>();
+  out->path = g.path;
+  out->frame = g.frame;
+  out->display_window = g.display_window;
+  out->data_window = g.data_window;
+  out->camera = g.camera;
+  out->depth = g.depth;
+  out->normal = g.normal;
+  out->motion_prev = g.motion_prev;
+  out->motion_next = g.motion_next;
+  return out;
+}
+
 }  // namespace
 
 FrameSource::FrameSource(const SequenceInfo& sequence, const InputOptions& options,
@@ -55,6 +71,13 @@ FrameSource::Result FrameSource::window(int frame) {
   for (int f : seq_.frames_on_disk) {
     if (std::abs(f - frame) > k) continue;
     auto it = ring_.find(f);
+    if (it != ring_.end() && f == frame && !it->second.full) {
+      // Composited before and trimmed (an output order that comes back to a frame): read its
+      // passes again, its light is kept.
+      it->second.g =
+          std::make_shared<GBuffer>(read_gbuffer(seq_, f, pipeline_.plan().roles, options_));
+      it->second.full = true;
+    }
     if (it == ring_.end()) {
       if (f == frame) {
         it = ring_.emplace(f, light(f)).first;  // the frame's own failure throws
@@ -72,8 +95,14 @@ FrameSource::Result FrameSource::window(int frame) {
     frames.push_back(it->second.g.get());
     indirect.push_back(&it->second.indirect);
   }
-  const Lit& own = ring_.at(frame);
-  return {own.g, temporal_window(frames, indirect, center, k)};
+  Lit& own = ring_.at(frame);
+  Result result{own.g, temporal_window(frames, indirect, center, k)};
+  // From now on the frame is only a neighbour (the caller holds the whole G-buffer for the
+  // composite): keep what reprojection reads, so that the ring holds the passes of the frames
+  // still to be written only.
+  own.g = geometry_of(*own.g);
+  own.full = false;
+  return result;
 }
 
 FrameSource::Result FrameSource::ema(int frame) {

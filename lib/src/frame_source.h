@@ -32,7 +32,8 @@ class FrameSource {
  private:
   struct Lit {
     std::shared_ptr<const GBuffer> g;
-    Image indirect;  // the frame's own light, before temporal filtering
+    Image indirect;    // the frame's own light, before temporal filtering
+    bool full = true;  // false once only what reprojection reads is kept
   };
   Lit light(int frame) const;
   Result window(int frame);
