@@ -754,6 +754,24 @@ TEST_F(Cli, RefusesToOverwriteAnInputFrame) {
   EXPECT_EQ(entries(), (std::set<std::string>{"sample.0001.exr", "sample.0002.exr"}));
 }
 
+TEST_F(Cli, RunningOnItsOwnOutputKeepsEveryChannelUniquelyNamed) {
+  // ssgi's output fed back in twice: the first round's channels become input.*, the second's
+  // input.input.*; no channel is lost or renamed by the EXR writer (channelNN).
+  const std::string in = testdata("sample/sample.0001.exr");
+  ASSERT_EQ(run_ssgi({"run", in, "-o", path("a.0001.exr"), "--rays", "2", "-q"}).exit_code, 0);
+  ASSERT_EQ(run_ssgi({"run", path("a.0001.exr"), "-o", path("b.0001.exr"), "--rays", "2", "-q"})
+                .exit_code,
+            0);
+  ASSERT_EQ(run_ssgi({"run", path("b.0001.exr"), "-o", path("c.0001.exr"), "--rays", "2", "-q"})
+                .exit_code,
+            0);
+  const ExrImage a = read_exr(path("a.0001.exr"));
+  const ExrImage c = read_exr(path("c.0001.exr"));
+  EXPECT_EQ(c.planes.size(), a.planes.size() + 2 * kOurChannels.size());
+  for (const auto& [name, plane] : c.planes) EXPECT_EQ(name.rfind("channel", 0), std::string::npos);
+  EXPECT_EQ(c.planes.at("input.input.indirect.R"), a.planes.at("indirect.R"));
+}
+
 TEST_F(Cli, InputChannelsCollidingWithOursAreKeptAsInputDot) {
   // Two frames of the sample with an extra `R` and `indirect.R`, as a beauty or an earlier
   // ssgi run would leave.

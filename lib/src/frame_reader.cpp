@@ -88,10 +88,14 @@ void check_windows(const SequenceInfo& seq, const OIIO::ImageSpec& spec, const s
 // than one read per role. Returns one plane per wanted channel.
 std::vector<std::vector<float>> read_channels(OIIO::ImageInput& in, int subimage,
                                               const std::vector<std::string>& wanted,
-                                              const std::string& path) {
+                                              const Box2i& data_window, const std::string& path) {
   if (!in.seek_subimage(subimage, 0))
     throw_input(path, "has no subimage " + std::to_string(subimage));
   const OIIO::ImageSpec& spec = in.spec();
+  // Every part the G-buffer is read from must cover the same pixels as the first part.
+  if (data_window_of(spec) != data_window)
+    throw_input(path, "part " + std::to_string(subimage) +
+                          " has a data window other than the first part's");
   std::vector<int> index(wanted.size());
   int lo = std::numeric_limits<int>::max(), hi = -1;
   for (std::size_t i = 0; i < wanted.size(); ++i) {
@@ -351,7 +355,7 @@ GBuffer read_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
   }
   std::map<std::pair<int, std::string>, std::vector<float>> planes;
   for (const auto& [subimage, names] : by_subimage) {
-    auto read = read_channels(*in, subimage, names, path);
+    auto read = read_channels(*in, subimage, names, seq.data_window, path);
     for (std::size_t i = 0; i < names.size(); ++i)
       planes[{subimage, names[i]}] = std::move(read[i]);
   }

@@ -133,6 +133,9 @@ void write_frame(const std::string& path, const GBuffer& frame,
     }
   }
   if (options.passthrough) {
+    // Every output name is unique: an input channel whose name is taken (by ours, or by an
+    // earlier input channel, as when ssgi's own output is its input) gets "input." in front,
+    // as often as it takes.
     bool warned = false;
     for (OutChannel& ch : read_passthrough(frame.path, data)) {
       if (ours.count(ch.name)) {
@@ -142,8 +145,9 @@ void write_frame(const std::string& path, const GBuffer& frame,
                       "input.<name> (e.g. input." +
                       ch.name + ")");
         warned = true;
-        ch.name = "input." + ch.name;
+        while (ours.count(ch.name)) ch.name = "input." + ch.name;
       }
+      ours.insert(ch.name);
       channels.push_back(std::move(ch));
     }
   }
