@@ -273,6 +273,9 @@ TEST_F(Cli, UsageErrorsExitTwoAndWriteNothing) {
   r = run_ssgi({"info", in, "--denoise-sigma-spatial", "0"});
   EXPECT_EQ(r.out, "");
   expect_usage_error(r, "info", "denoise: sigma_spatial must be positive (got 0.000000)");
+  // ssgi writes OpenEXR only, whatever the output's extension would make OIIO write.
+  expect_usage_error(run_ssgi({"run", in, "-o", path("out.####.tif")}), "run",
+                     "output '" + path("out.####.tif") + "' must end in .exr: ssgi writes OpenEXR");
   // Several frames cannot go to one file name.
   expect_usage_error(run_ssgi({"run", in, "-o", path("out.exr")}), "run",
                      "output '" + path("out.exr") +

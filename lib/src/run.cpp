@@ -3,6 +3,8 @@
 
 #include <chrono>
 #include <filesystem>
+#include <map>
+#include <set>
 
 #include "frame_source.h"
 #include "ssgi/log.h"
@@ -14,11 +16,11 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// True when `a` and `b` name the same file, or would once `a` is written.
-bool same_file(const std::string& a, const std::string& b) {
+// The path a file has, or would have once written, with symbolic links resolved.
+std::string resolved(const std::string& path) {
   std::error_code ec;
-  if (fs::exists(a, ec) && fs::exists(b, ec)) return fs::equivalent(a, b, ec);
-  return fs::weakly_canonical(a, ec) == fs::weakly_canonical(b, ec);
+  const fs::path p = fs::weakly_canonical(path, ec);
+  return ec ? fs::absolute(path).lexically_normal().string() : p.string();
 }
 
 void check_outputs(const SequenceInfo& seq, const SequencePattern& out,
@@ -26,14 +28,21 @@ void check_outputs(const SequenceInfo& seq, const SequencePattern& out,
   if (!out.has_frame_field && seq.frames.size() > 1)
     throw_usage("output '" + out_spec + "' has no frame field (e.g. ####) but " +
                 std::to_string(seq.frames.size()) + " frames are to be written");
+  if (out.suffix.size() < 4 || out.suffix.compare(out.suffix.size() - 4, 4, ".exr") != 0)
+    throw_usage("output '" + out_spec + "' must end in .exr: ssgi writes OpenEXR");
+  // Each path resolved once (a shot has thousands of frames), then looked up.
+  std::map<std::string, int> inputs;
+  for (int g : seq.frames_on_disk) inputs.emplace(resolved(seq.pattern.path_for(g)), g);
+  std::set<std::string> directories;
   for (int f : seq.frames) {
-    for (int g : seq.frames_on_disk) {
-      if (same_file(out.path_for(f), seq.pattern.path_for(g)))
-        throw Error(ErrorKind::kUsage, out.path_for(f),
-                    "output would overwrite input frame " + std::to_string(g));
-    }
+    const std::string path = out.path_for(f);
+    const auto it = inputs.find(resolved(path));
+    if (it != inputs.end())
+      throw Error(ErrorKind::kUsage, path,
+                  "output would overwrite input frame " + std::to_string(it->second));
     // Fail before any frame is computed, with one line, rather than once per frame.
-    check_output_directory(out.path_for(f));
+    const std::string directory = fs::path(path).parent_path().string();
+    if (directories.insert(directory).second) check_output_directory(path);
   }
 }
 
