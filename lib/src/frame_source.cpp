@@ -41,12 +41,6 @@ FrameSource::Lit FrameSource::light(int frame) const {
   return {std::move(g), std::move(indirect)};
 }
 
-int FrameSource::previous_on_disk(int frame) const {
-  const auto& disk = seq_.frames_on_disk;
-  const auto it = std::lower_bound(disk.begin(), disk.end(), frame);
-  return it == disk.begin() ? frame : *std::prev(it);
-}
-
 FrameSource::Result FrameSource::get(int frame) {
   switch (pipeline_.plan().temporal) {
     case TemporalMode::kWindow:
@@ -107,37 +101,47 @@ FrameSource::Result FrameSource::window(int frame) {
 
 FrameSource::Result FrameSource::ema(int frame) {
   const float alpha = pipeline_.settings().ema_alpha;
-  // Continue the running average when the last step was the previous frame on disk; otherwise
-  // start over early enough that the head start no longer matters (the pre-roll).
-  if (!(ema_valid_ && ema_frame_ == previous_on_disk(frame))) {
+  const std::vector<int>& disk = seq_.frames_on_disk;
+  const int target =
+      static_cast<int>(std::lower_bound(disk.begin(), disk.end(), frame) - disk.begin());
+  // The pre-roll counts frames on disk (averaging steps), not frame numbers: a shot on twos
+  // needs as many steps as one on ones.
+  const int preroll =
+      std::min(ema_preroll_frames(alpha, kEmaPrerollBound), static_cast<int>(disk.size()));
+  // Go on from the last frame stepped when it comes before this one within the pre-roll (the
+  // same running average a whole run computes); otherwise start over, `preroll` frames on disk
+  // earlier, so that the head start no longer matters.
+  int start;
+  if (ema_valid_ && ema_index_ < target && target - ema_index_ <= preroll) {
+    start = ema_index_ + 1;
+  } else {
     ema_valid_ = false;
-    const int preroll = ema_preroll_frames(alpha, kEmaPrerollBound);
-    for (int f : seq_.frames_on_disk) {
-      if (f < frame - preroll || f >= frame) continue;
-      try {
-        Lit lit = light(f);
-        ema_out_ = ema_valid_ && ema_frame_ == previous_on_disk(f)
-                       ? temporal_ema(*lit.g, lit.indirect, *ema_g_, ema_out_, alpha)
-                       : std::move(lit.indirect);
-        ema_g_ = std::move(lit.g);
-        ema_frame_ = f;
-        ema_valid_ = true;
-      } catch (const Error& e) {
-        log_warning((e.file().empty() ? seq_.pattern.path_for(f) : e.file()) + ": " + e.what() +
-                    "; the running average starts again after it");
-        ema_valid_ = false;
-      }
+    start = std::max(0, target - preroll);
+  }
+  for (int i = start; i < target; ++i) {
+    try {
+      ema_step(i, light(disk[i]));
+    } catch (const Error& e) {
+      log_warning((e.file().empty() ? seq_.pattern.path_for(disk[i]) : e.file()) + ": " + e.what() +
+                  "; the running average starts again after it");
+      ema_valid_ = false;
     }
   }
   Lit lit = light(frame);
-  Image out = ema_valid_ && ema_frame_ == previous_on_disk(frame)
-                  ? temporal_ema(*lit.g, lit.indirect, *ema_g_, ema_out_, alpha)
-                  : std::move(lit.indirect);
-  ema_g_ = lit.g;
-  ema_out_ = out;
-  ema_frame_ = frame;
+  std::shared_ptr<const GBuffer> g = lit.g;
+  ema_step(target, std::move(lit));
+  return {std::move(g), ema_out_};
+}
+
+void FrameSource::ema_step(int index, Lit lit) {
+  const bool follows = ema_valid_ && ema_index_ == index - 1;
+  ema_out_ = follows ? temporal_ema(*lit.g, lit.indirect, *ema_g_, ema_out_,
+                                    pipeline_.settings().ema_alpha)
+                     : std::move(lit.indirect);
+  // The next step reprojects from this frame: its geometry is all it reads.
+  ema_g_ = geometry_of(*lit.g);
+  ema_index_ = index;
   ema_valid_ = true;
-  return {std::move(lit.g), std::move(out)};
 }
 
 std::size_t FrameSource::bytes_held() const {

@@ -38,15 +38,15 @@ class FrameSource {
   Lit light(int frame) const;
   Result window(int frame);
   Result ema(int frame);
-  // The frame on disk just before `frame`, or `frame` itself when there is none.
-  int previous_on_disk(int frame) const;
+  // One step of the running average over the frame at `index` in frames_on_disk.
+  void ema_step(int index, Lit lit);
 
   const SequenceInfo& seq_;
   const InputOptions& options_;
   const Pipeline& pipeline_;
   std::map<int, Lit> ring_;  // window: frames on disk around the last output frame
-  // EMA: the last frame stepped and its filtered output.
-  int ema_frame_ = 0;
+  // EMA: the last frame stepped (its index in frames_on_disk) and its filtered output.
+  int ema_index_ = 0;
   bool ema_valid_ = false;
   std::shared_ptr<const GBuffer> ema_g_;
   Image ema_out_;

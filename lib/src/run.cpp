@@ -1,6 +1,7 @@
 // The frame loop of `ssgi run`.
 #include "ssgi/run.h"
 
+#include <cctype>
 #include <chrono>
 #include <filesystem>
 #include <map>
@@ -28,7 +29,9 @@ void check_outputs(const SequenceInfo& seq, const SequencePattern& out,
   if (!out.has_frame_field && seq.frames.size() > 1)
     throw_usage("output '" + out_spec + "' has no frame field (e.g. ####) but " +
                 std::to_string(seq.frames.size()) + " frames are to be written");
-  if (out.suffix.size() < 4 || out.suffix.compare(out.suffix.size() - 4, 4, ".exr") != 0)
+  std::string extension = fs::path(out_spec).extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (extension != ".exr")
     throw_usage("output '" + out_spec + "' must end in .exr: ssgi writes OpenEXR");
   // Each path resolved once (a shot has thousands of frames), then looked up.
   std::map<std::string, int> inputs;

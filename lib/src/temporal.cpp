@@ -478,7 +478,9 @@ int ema_preroll_frames(float alpha, double relative_bound) {
   if (!(relative_bound > 0 && relative_bound < 1))
     throw_usage("EMA pre-roll bound " + std::to_string(relative_bound) + " is outside (0, 1)");
   if (alpha == 1) return 0;
-  return static_cast<int>(std::ceil(std::log(relative_bound) / std::log1p(-double{alpha})));
+  // A tiny alpha asks for more frames than any shot has: cap before the conversion.
+  const double frames = std::ceil(std::log(relative_bound) / std::log1p(-double{alpha}));
+  return static_cast<int>(std::min(frames, 1e9));
 }
 
 }  // namespace ssgi::detail
