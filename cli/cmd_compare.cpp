@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "run_options.h"
 #include "ssgi/compare.h"
 #include "ssgi/error.h"
 #include "ssgi/sequence.h"
@@ -182,12 +183,8 @@ std::optional<Args> parse_args(int argc, char** argv) {
         return std::nullopt;
       case ':':
         ssgi::throw_usage(std::string("option '") + argv[optind - 1] + "' needs a value");
-      default: {
-        // optopt holds an unknown short option; an unknown long one is the last argument read.
-        const std::string name = optopt > 0 && optopt < 128 ? std::string("-") + char(optopt)
-                                                            : std::string(argv[optind - 1]);
-        ssgi::throw_usage("unknown option '" + name + "'");
-      }
+      default:
+        ssgi::throw_usage("unknown option '" + unknown_option_name(argv) + "'");
     }
   }
   if (argc - optind != 2)

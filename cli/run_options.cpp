@@ -147,6 +147,12 @@ void parse_temporal(const char* text, ssgi::GiSettings* gi) {
 
 }  // namespace
 
+std::string unknown_option_name(char** argv) {
+  // optopt holds an unknown short option; an unknown long one is the last argument read.
+  return optopt > 0 && optopt < 128 ? std::string("-") + static_cast<char>(optopt)
+                                    : std::string(argv[optind - 1]);
+}
+
 const char* common_options_help() {
   return "input:\n"
          "  --frames LIST         frames to write: 1-50, 1-50x2, 3,7,9, -5--1\n"
@@ -228,8 +234,9 @@ CommonOptions parse_common_options(int argc, char** argv, bool need_output) {
         break;
       case kFov: {
         in.camera.hfov_deg = parse_double("fov", a);
-        if (!(in.camera.hfov_deg > 0 && in.camera.hfov_deg < 180))
-          ssgi::throw_usage("--fov must be between 0 and 180 degrees (exclusive)");
+        // Below 1e-6 degrees the focal length in pixels no longer fits a float.
+        if (!(in.camera.hfov_deg >= 1e-6 && in.camera.hfov_deg < 180))
+          ssgi::throw_usage("--fov must be at least 1e-6 and below 180 degrees");
         break;
       }
       case kCamera:
@@ -361,7 +368,7 @@ CommonOptions parse_common_options(int argc, char** argv, bool need_output) {
       case ':':
         ssgi::throw_usage(std::string("option '") + argv[optind - 1] + "' needs a value");
       default:
-        ssgi::throw_usage(std::string("unknown option '") + argv[optind - 1] + "'");
+        ssgi::throw_usage("unknown option '" + unknown_option_name(argv) + "'");
     }
   }
   if (o.help) return o;

@@ -25,6 +25,9 @@ struct CommonOptions {
 // ssgi::Error(kUsage) on a bad option or value.
 CommonOptions parse_common_options(int argc, char** argv, bool need_output);
 
+// After getopt_long returned '?': the option it did not know, as the user wrote it.
+std::string unknown_option_name(char** argv);
+
 // The option list for --help.
 const char* common_options_help();
 

@@ -182,7 +182,9 @@ void convert_depth(Image& depth, DepthKind kind, double background, const Camera
           break;
         }
       }
-      const bool surface = std::isfinite(z) && z > 0 && z < background && std::isfinite(v);
+      // Below float's smallest normal number 1/z overflows: no surface is that close.
+      const bool surface = std::isfinite(z) && z >= std::numeric_limits<float>::min() &&
+                           z < background && std::isfinite(v);
       d = surface ? static_cast<float>(z) : inf;
     }
   }
@@ -268,8 +270,8 @@ SequenceInfo open_sequence(const InputOptions& options) {
   }
   // The whole shot on disk, also for one named file of it (`shot.0005.exr`): the temporal
   // window reads its neighbours, so a frame has the same bits however the shot is split.
-  seq.frames_on_disk = seq.pattern.has_frame_field ? find_frames_on_disk(seq.pattern)
-                                                   : std::vector<int>();
+  seq.frames_on_disk =
+      seq.pattern.has_frame_field ? find_frames_on_disk(seq.pattern) : std::vector<int>();
   std::vector<int> wanted;
   if (!options.frames.empty())
     wanted = parse_frame_list(options.frames);

@@ -27,8 +27,9 @@ void validate(const GiSettings& s) {
   if (s.rays < 1 || s.rays > 4096) throw_usage("--rays must be between 1 and 4096");
   if (s.max_steps < 1 || s.max_steps > 1 << 20)
     throw_usage("--max-steps must be between 1 and 1048576");
-  if (!(s.max_distance >= 0) || !std::isfinite(s.max_distance))
-    throw_usage("--max-distance must be >= 0 (0: unlimited)");
+  // Beyond 1e30 a distance no longer fits the march's float arithmetic; 0 means unlimited.
+  if (!(s.max_distance >= 0) || !(s.max_distance <= 1e30))
+    throw_usage("--max-distance must be between 0 (unlimited) and 1e30");
   if (!(s.thickness > 0) || !std::isfinite(s.thickness)) throw_usage("--thickness must be > 0");
   if (!(s.start_offset >= 0) || s.start_offset > 1)
     throw_usage("the start offset must be between 0 and 1");
