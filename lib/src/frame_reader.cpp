@@ -267,6 +267,23 @@ SequenceInfo open_sequence(const InputOptions& options) {
   if (!seq.pattern.has_frame_field) {
     seq.pattern = pattern_for_single_file(options.pattern, &frames_in_name);
     if (!fs::exists(options.pattern)) throw_io(options.pattern, "no such file");
+    // Digits without a leading zero (`shot.10000.exr`) fit any padding up to their count: take
+    // the one under which the most files of the shot are found (#### for 9999, 10000, ...).
+    const std::string digits = std::to_string(std::abs(frames_in_name.front()));
+    if (seq.pattern.has_frame_field && seq.pattern.padding == static_cast<int>(digits.size())) {
+      SequencePattern best = seq.pattern;
+      std::size_t most = find_frames_on_disk(best).size();
+      for (int padding = seq.pattern.padding - 1; padding >= 1; --padding) {
+        SequencePattern candidate = seq.pattern;
+        candidate.padding = padding;
+        const std::size_t found = find_frames_on_disk(candidate).size();
+        if (found > most) {
+          most = found;
+          best = candidate;
+        }
+      }
+      seq.pattern = best;
+    }
   }
   // The whole shot on disk, also for one named file of it (`shot.0005.exr`): the temporal
   // window reads its neighbours, so a frame has the same bits however the shot is split.
