@@ -144,10 +144,4 @@ void FrameSource::ema_step(int index, Lit lit) {
   ema_valid_ = true;
 }
 
-std::size_t FrameSource::bytes_held() const {
-  std::size_t bytes = ema_out_.bytes() + (ema_g_ ? ema_g_->bytes() : 0);
-  for (const auto& [f, lit] : ring_) bytes += lit.g->bytes() + lit.indirect.bytes();
-  return bytes;
-}
-
 }  // namespace ssgi::detail

@@ -26,9 +26,6 @@ class FrameSource {
   };
   Result get(int frame);
 
-  // Bytes held in the ring now (G-buffers and indirect light), for memory reports.
-  std::size_t bytes_held() const;
-
  private:
   struct Lit {
     std::shared_ptr<const GBuffer> g;

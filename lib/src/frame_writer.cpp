@@ -31,9 +31,8 @@ struct OutChannel {
 // The input's channels, all subimages, as float planes in their original formats. Channels of
 // a named part are prefixed with the part name when they have no layer of their own (Karma's
 // per-AOV parts hold plain R, G, B), so that a single-part output keeps them apart.
-std::vector<OutChannel> read_passthrough(const std::string& path, const Box2i& data) {
-  auto in = OIIO::ImageInput::open(path);
-  if (!in) throw_io(path, "cannot read image: " + detail::one_line(OIIO::geterror()));
+std::vector<OutChannel> read_passthrough(OIIO::ImageInput* in, const std::string& path,
+                                         const Box2i& data) {
   std::vector<OutChannel> out;
   int nsub = 0;
   while (in->seek_subimage(nsub, 0)) ++nsub;
@@ -115,6 +114,9 @@ void check_output_directory(const std::string& path) {
 void write_frame(const std::string& path, const GBuffer& frame,
                  const std::vector<OutputLayer>& layers, const WriteOptions& options) {
   check_output_directory(path);
+  // The input is opened once: its header (part 0) for the metadata, its pixels to pass through.
+  auto in = detail::open_image(frame.path);
+  const OIIO::ImageSpec in_spec = in->spec();
   const Box2i& data = frame.data_window;
   const std::size_t pixels = static_cast<std::size_t>(data.width()) * data.height();
   const OIIO::TypeDesc our_format = options.half ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT;
@@ -137,7 +139,7 @@ void write_frame(const std::string& path, const GBuffer& frame,
     // earlier input channel, as when ssgi's own output is its input) gets "input." in front,
     // as often as it takes.
     bool warned = false;
-    for (OutChannel& ch : read_passthrough(frame.path, data)) {
+    for (OutChannel& ch : read_passthrough(in.get(), frame.path, data)) {
       if (ours.count(ch.name)) {
         if (options.warn_collisions && !warned)
           log_warning(frame.path +
@@ -152,9 +154,7 @@ void write_frame(const std::string& path, const GBuffer& frame,
     }
   }
 
-  auto in = OIIO::ImageInput::open(frame.path);
-  if (!in) throw_io(frame.path, "cannot read header: " + detail::one_line(OIIO::geterror()));
-  const OIIO::ImageSpec& in_spec = in->spec();
+  in.reset();
 
   const int n = static_cast<int>(channels.size());
   OIIO::ImageSpec spec(data.width(), data.height(), n, OIIO::TypeDesc::FLOAT);

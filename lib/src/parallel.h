@@ -15,12 +15,4 @@ void parallel_for_rows(int rows, const Body& body) {
   });
 }
 
-// Calls body(i) for every i in [0, count), in parallel, one item per task when items are big.
-template <typename Body>
-void parallel_for_each_index(int count, const Body& body) {
-  tbb::parallel_for(tbb::blocked_range<int>(0, count, 1), [&](const tbb::blocked_range<int>& r) {
-    for (int i = r.begin(); i < r.end(); ++i) body(i);
-  });
-}
-
 }  // namespace ssgi::detail
