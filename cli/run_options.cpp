@@ -218,6 +218,8 @@ CommonOptions parse_common_options(int argc, char** argv, bool need_output) {
         o.run.output = a;
         break;
       case kFrames:
+        // Empty would mean "every frame": a variable that expanded to nothing must not.
+        if (*a == '\0') ssgi::throw_usage("--frames: empty frame list");
         in.frames = a;
         break;
       case kSkipMissing:
@@ -349,13 +351,9 @@ CommonOptions parse_common_options(int argc, char** argv, bool need_output) {
       case kNoPassthrough:
         o.run.write.passthrough = false;
         break;
-      case kLayerPrefix: {
-        std::string p = a;
-        if (p.empty()) ssgi::throw_usage("--layer-prefix must not be empty");
-        if (p.back() != '.') p += '.';
-        o.run.write.layer_prefix = p;
+      case kLayerPrefix:
+        o.run.write.layer_prefix = ssgi::parse_layer_prefix(a);
         break;
-      }
       case 'v':
         o.verbose = true;
         break;

@@ -450,9 +450,16 @@ TEST_F(Cli, HalfDatatypeAppliesToOurChannelsOnlyAndClamps) {
   std::fill(bright.planes.at("ViewLayer.Emit.R").begin(),
             bright.planes.at("ViewLayer.Emit.R").end(), 1e6f);
   write_exr(path("bright.0001.exr"), bright);
-  const CliResult r = run_ssgi({"run", path("bright.0001.exr"), "-o", path("o.exr"), "--rays", "2",
-                                "-q", "--datatype", "half"});
+  const CliResult r = run_ssgi(
+      {"run", path("bright.0001.exr"), "-o", path("o.exr"), "--rays", "2", "--datatype", "half"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
+  // One warning for the frame, counting what was clamped, then the progress line.
+  ASSERT_EQ(r.err_lines().size(), 2u) << r.err;
+  EXPECT_EQ(r.err_lines()[0].rfind("ssgi: warning: " + path("o.exr") + ": ", 0), 0u) << r.err;
+  EXPECT_NE(r.err_lines()[0].find(" values of ssgi's layers beyond the half-float range were "
+                                  "clamped to +-65504"),
+            std::string::npos)
+      << r.err;
   const ExrImage out = read_exr(path("o.exr"));
   for (const std::string& c : out.spec.channelnames) {
     const bool ours = std::count(kOurChannels.begin(), kOurChannels.end(), c) > 0;
@@ -807,6 +814,212 @@ TEST_F(Cli, InputChannelsCollidingWithOursAreKeptAsInputDot) {
     EXPECT_EQ(out.planes.at("input.indirect.R").back(), 0.125f * f);
     EXPECT_NE(out.planes.at("R"), out.planes.at("input.R"));
   }
+}
+
+// One part of an EXR in its own per-channel formats: the spec and the interleaved bytes.
+struct NativePart {
+  OIIO::ImageSpec spec;
+  std::vector<unsigned char> bytes;
+};
+
+std::vector<NativePart> read_native_parts(const std::string& path) {
+  std::vector<NativePart> parts;
+  auto in = OIIO::ImageInput::open(path);
+  EXPECT_TRUE(in) << path;
+  if (!in) return parts;
+  for (int s = 0; in->seek_subimage(s, 0); ++s) {
+    NativePart part;
+    part.spec = in->spec();
+    part.bytes.resize(part.spec.image_bytes(true));
+    EXPECT_TRUE(in->read_image(s, 0, 0, part.spec.nchannels, OIIO::TypeUnknown, part.bytes.data()))
+        << path << " part " << s;
+    parts.push_back(std::move(part));
+  }
+  return parts;
+}
+
+void write_native_parts(const std::string& path, const std::vector<NativePart>& parts) {
+  std::vector<OIIO::ImageSpec> specs;
+  for (const NativePart& p : parts) specs.push_back(p.spec);
+  auto out = OIIO::ImageOutput::create(path);
+  ASSERT_TRUE(out && out->open(path, static_cast<int>(specs.size()), specs.data())) << path;
+  for (std::size_t i = 0; i < parts.size(); ++i) {
+    if (i > 0) ASSERT_TRUE(out->open(path, specs[i], OIIO::ImageOutput::AppendSubimage));
+    ASSERT_TRUE(out->write_image(OIIO::TypeUnknown, parts[i].bytes.data())) << out->geterror();
+  }
+  ASSERT_TRUE(out->close());
+}
+
+// The bytes of channel `c` of every pixel of a native part, one after the other.
+std::vector<unsigned char> channel_bytes(const NativePart& part, int c) {
+  const std::size_t stride = part.spec.pixel_bytes(true);
+  std::size_t offset = 0;
+  for (int k = 0; k < c; ++k) offset += part.spec.channelformat(k).size();
+  const std::size_t size = part.spec.channelformat(c).size();
+  std::vector<unsigned char> out;
+  for (std::size_t p = 0; p + stride <= part.bytes.size(); p += stride)
+    out.insert(out.end(), part.bytes.begin() + p + offset, part.bytes.begin() + p + offset + size);
+  return out;
+}
+
+TEST_F(Cli, MultiPartInputComesBackInItsOwnTypesPartsAndAttributes) {
+  // Part 0: the sample frame (float) plus a uint32 object ID above 2^24 (float would change
+  // about half of them) and Cryptomatte's attributes; part 1: a Cryptomatte rank layer over a
+  // smaller data window; part 2: half masks. All three come back as they were.
+  const std::vector<NativePart> sample = read_native_parts(testdata("sample/sample.0001.exr"));
+  ASSERT_EQ(sample.size(), 1u);
+  const OIIO::ImageSpec& base = sample[0].spec;
+  const std::size_t pixels = static_cast<std::size_t>(base.width) * base.height;
+  std::vector<NativePart> parts(3);
+
+  NativePart& beauty = parts[0];
+  beauty.spec = base;
+  beauty.spec.channelformats.assign(base.nchannels, OIIO::TypeDesc::FLOAT);
+  beauty.spec.channelnames.push_back("objectId");
+  beauty.spec.channelformats.push_back(OIIO::TypeDesc::UINT);
+  beauty.spec.nchannels += 1;
+  beauty.spec.attribute("oiio:subimagename", "rgba");
+  beauty.spec.attribute("cryptomatte/3ae39a5/name", "CryptoObject");
+  beauty.spec.attribute("cryptomatte/3ae39a5/hash", "MurmurHash3_32");
+  beauty.spec.attribute("cryptomatte/3ae39a5/manifest", "{\"Cube\":\"3f800000\",\"Ball\":\"bf8\"}");
+  const std::size_t base_bytes = base.pixel_bytes(true);
+  for (std::size_t p = 0; p < pixels; ++p) {
+    const unsigned char* src = sample[0].bytes.data() + p * base_bytes;
+    beauty.bytes.insert(beauty.bytes.end(), src, src + base_bytes);
+    const std::uint32_t id = (1u << 24) + 2654435761u * static_cast<std::uint32_t>(p);
+    const auto* b = reinterpret_cast<const unsigned char*>(&id);
+    beauty.bytes.insert(beauty.bytes.end(), b, b + 4);
+  }
+
+  NativePart& rank = parts[1];
+  rank.spec = OIIO::ImageSpec(40, 20, 4, OIIO::TypeDesc::FLOAT);
+  rank.spec.x = 10;
+  rank.spec.y = 5;
+  rank.spec.full_x = base.full_x;
+  rank.spec.full_y = base.full_y;
+  rank.spec.full_width = base.full_width;
+  rank.spec.full_height = base.full_height;
+  rank.spec.channelnames = {"CryptoObject00.R", "CryptoObject00.G", "CryptoObject00.B",
+                            "CryptoObject00.A"};
+  rank.spec.attribute("oiio:subimagename", "crypto");
+  rank.spec.attribute("cryptomatte/3ae39a5/conversion", "uint32_to_float32");
+  for (int i = 0; i < 40 * 20 * 4; ++i) {
+    const float v = 1e-3f * static_cast<float>(i) + 1e7f * static_cast<float>(i % 3);
+    const auto* b = reinterpret_cast<const unsigned char*>(&v);
+    rank.bytes.insert(rank.bytes.end(), b, b + 4);
+  }
+
+  NativePart& masks = parts[2];
+  masks.spec = OIIO::ImageSpec(base.width, base.height, 2, OIIO::TypeDesc::HALF);
+  masks.spec.x = base.x;
+  masks.spec.y = base.y;
+  masks.spec.full_x = base.full_x;
+  masks.spec.full_y = base.full_y;
+  masks.spec.full_width = base.full_width;
+  masks.spec.full_height = base.full_height;
+  masks.spec.channelnames = {"mask.R", "mask.G"};
+  masks.spec.attribute("oiio:subimagename", "masks");
+  for (std::size_t i = 0; i < 2 * pixels; ++i) {
+    const std::uint16_t h = static_cast<std::uint16_t>(i * 37u);  // every bit pattern kind
+    const auto* b = reinterpret_cast<const unsigned char*>(&h);
+    masks.bytes.insert(masks.bytes.end(), b, b + 2);
+  }
+  write_native_parts(path("mp.0001.exr"), parts);
+
+  const CliResult r =
+      run_ssgi({"run", path("mp.0001.exr"), "-o", path("out.0001.exr"), "--rays", "2", "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::vector<NativePart> got = read_native_parts(path("out.0001.exr"));
+  ASSERT_EQ(got.size(), 3u);
+  // Part 0: ours and every input channel, each in its own type with its own bytes (OpenEXR
+  // keeps a part's channels sorted by name).
+  const OIIO::ImageSpec& g0 = got[0].spec;
+  ASSERT_EQ(g0.nchannels, static_cast<int>(kOurChannels.size()) + beauty.spec.nchannels);
+  for (const std::string& c : kOurChannels) EXPECT_GE(g0.channelindex(c), 0) << c;
+  for (int c = 0; c < beauty.spec.nchannels; ++c) {
+    const std::string& name = beauty.spec.channelnames[c];
+    const int oc = g0.channelindex(name);
+    ASSERT_GE(oc, 0) << name;
+    EXPECT_EQ(g0.channelformat(oc), beauty.spec.channelformat(c)) << name;
+    EXPECT_EQ(channel_bytes(got[0], oc), channel_bytes(beauty, c)) << name;
+  }
+  EXPECT_EQ(g0.get_string_attribute("oiio:subimagename"), "rgba");
+  for (const char* a : {"cryptomatte/3ae39a5/name", "cryptomatte/3ae39a5/hash",
+                        "cryptomatte/3ae39a5/manifest", "BlenderMultiChannel"})
+    EXPECT_EQ(g0.get_string_attribute(a), beauty.spec.get_string_attribute(a)) << a;
+  EXPECT_FALSE(g0.get_string_attribute("ssgi:version").empty());
+  // Parts 1 and 2: the same windows, channels, types, bytes and attributes.
+  for (int k = 1; k <= 2; ++k) {
+    const OIIO::ImageSpec& want = parts[k].spec;
+    const OIIO::ImageSpec& have = got[k].spec;
+    EXPECT_EQ(have.get_string_attribute("oiio:subimagename"),
+              want.get_string_attribute("oiio:subimagename"));
+    EXPECT_EQ(std::vector<int>({have.x, have.y, have.width, have.height}),
+              std::vector<int>({want.x, want.y, want.width, want.height}));
+    EXPECT_EQ(have.channelnames, want.channelnames);
+    for (int c = 0; c < want.nchannels; ++c)
+      EXPECT_EQ(have.channelformat(c), want.channelformat(c));
+    EXPECT_EQ(got[k].bytes, parts[k].bytes) << "part " << k;
+  }
+  EXPECT_EQ(got[1].spec.get_string_attribute("cryptomatte/3ae39a5/conversion"),
+            "uint32_to_float32");
+}
+
+TEST_F(Cli, SilentWrongResultsAreRefused) {
+  const std::string in = testdata("sample/sample.0001.exr");
+  // An empty --frames (a variable that expanded to nothing) is not "every frame".
+  expect_usage_error(run_ssgi({"run", testdata("sample/sample.####.exr"), "-o", path("o.####.exr"),
+                               "--frames", ""}),
+                     "run", "--frames: empty frame list");
+  // A frame range in the output name would be ignored.
+  CliResult r = run_ssgi({"run", testdata("sample/sample.####.exr"), "-o", path("o.1-3#.exr")});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("names frames"), std::string::npos) << r.err;
+  // Layer prefixes that are not layer names.
+  for (const std::string bad : {".", "..", "a..b", ".a", "a b", ""}) {
+    r = run_ssgi({"run", in, "-o", path("o.exr"), "--layer-prefix", bad});
+    EXPECT_EQ(r.exit_code, 2) << "'" << bad << "': " << r.err;
+    EXPECT_NE(r.err.find("is not a layer name"), std::string::npos) << r.err;
+  }
+  EXPECT_TRUE(entries().empty());
+}
+
+TEST_F(Cli, FrameWithoutSurfacesWarnsAndSaysWhy) {
+  // Positive depth read as negative: every pixel is background. One warning for the frame,
+  // naming it and the likely cause.
+  const CliResult r = run_ssgi({"run", testdata("sample/sample.0001.exr"), "-o", path("o.exr"),
+                                "--rays", "2", "--temporal", "none", "--depth-kind", "negative"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::vector<std::string> lines = r.err_lines();
+  ASSERT_EQ(lines.size(), 2u) << r.err;  // the warning and the progress line
+  EXPECT_EQ(lines[0], "ssgi: warning: " + testdata("sample/sample.0001.exr") + ": 0 of 6144 " +
+                          "pixels have a surface, the rest get no GI: its depths are positive " +
+                          "but --depth-kind is negative");
+  // The right kind: no warning.
+  const CliResult ok = run_ssgi({"run", testdata("sample/sample.0001.exr"), "-o", path("p.exr"),
+                                 "--rays", "2", "--temporal", "none", "--depth-kind", "planar"});
+  ASSERT_EQ(ok.exit_code, 0) << ok.err;
+  EXPECT_EQ(ok.err_lines().size(), 1u) << ok.err;
+}
+
+TEST_F(Cli, OneChannelLayerIsFoundByItsName) {
+  // The sample with its depth as the single channel of layer `zdist` (component Y).
+  ExrImage image = read_exr(testdata("sample/sample.0001.exr"));
+  for (std::string& name : image.spec.channelnames)
+    if (name == "ViewLayer.Depth.Z") name = "zdist.Y";
+  image.planes["zdist.Y"] = image.planes.at("ViewLayer.Depth.Z");
+  write_exr(path("z.0001.exr"), image);
+  const CliResult r = run_ssgi({"run", path("z.0001.exr"), "-o", path("z_out.exr"), "--rays", "2",
+                                "-q", "--channel", "depth=zdist"});
+  // The plain frame alone too (its neighbours on disk would join its temporal window).
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const CliResult plain = run_ssgi({"run", testdata("sample/sample.0001.exr"), "-o",
+                                    path("plain.exr"), "--rays", "2", "-q", "--temporal", "none"});
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  // The same depth, so the same light as the plain file.
+  const std::vector<float> got = read_exr(path("z_out.exr")).planes.at("indirect.R");
+  EXPECT_EQ(got, read_exr(path("plain.exr")).planes.at("indirect.R"));
+  EXPECT_GT(*std::max_element(got.begin(), got.end()), 0.0f);
 }
 
 }  // namespace

@@ -134,8 +134,8 @@ Box2i common_data_window(OIIO::ImageInput& in, const std::vector<ChannelRef>& re
   return window;
 }
 
-// Reads `refs` into the planes of an image of the shared data window's size. One channel-range
-// read per subimage: OIIO decompresses the file again for every read.
+// Reads `refs` into the planes of an image of the shared data window's size, one channel-range
+// read per subimage.
 Image read_planes(OIIO::ImageInput& in, const std::vector<ChannelRef>& refs, const Box2i& window,
                   const std::string& path) {
   Image image(window.width(), window.height(), static_cast<int>(refs.size()));
@@ -148,17 +148,10 @@ Image read_planes(OIIO::ImageInput& in, const std::vector<ChannelRef>& refs, con
     for (std::size_t i : items)
       index.push_back(
           static_cast<int>(std::find(names.begin(), names.end(), refs[i].name) - names.begin()));
-    const int lo = *std::min_element(index.begin(), index.end());
-    const int hi = *std::max_element(index.begin(), index.end());
-    const int n = hi - lo + 1;
-    std::vector<float> interleaved(image.plane_size() * n);
-    if (!in.read_image(subimage, 0, lo, hi + 1, OIIO::TypeDesc::FLOAT, interleaved.data()))
-      throw_io(path, "cannot read pixels: " + detail::one_line(in.geterror()));
-    for (std::size_t k = 0; k < items.size(); ++k) {
-      float* plane = image.plane(static_cast<int>(items[k]));
-      const int c = index[k] - lo;
-      for (std::size_t p = 0; p < image.plane_size(); ++p) plane[p] = interleaved[p * n + c];
-    }
+    const std::vector<std::vector<float>> planes =
+        detail::read_float_planes(in, subimage, index, path);
+    for (std::size_t k = 0; k < items.size(); ++k)
+      std::copy(planes[k].begin(), planes[k].end(), image.plane(static_cast<int>(items[k])));
   }
   return image;
 }

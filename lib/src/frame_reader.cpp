@@ -83,9 +83,7 @@ void check_windows(const SequenceInfo& seq, const OIIO::ImageSpec& spec, const s
   if (data != seq.data_window) throw_input(path, "data window differs from the first frame's");
 }
 
-// Reads the channels `wanted` (by full name) of one subimage with a single channel-range read:
-// OIIO 2.4 decompresses every ZIP block again for each read, so one covering range is cheaper
-// than one read per role. Returns one plane per wanted channel.
+// Reads the channels `wanted` (by full name) of one subimage, one plane each.
 std::vector<std::vector<float>> read_channels(OIIO::ImageInput& in, int subimage,
                                               const std::vector<std::string>& wanted,
                                               const Box2i& data_window, const std::string& path) {
@@ -97,25 +95,12 @@ std::vector<std::vector<float>> read_channels(OIIO::ImageInput& in, int subimage
     throw_input(path, "part " + std::to_string(subimage) +
                           " has a data window other than the first part's");
   std::vector<int> index(wanted.size());
-  int lo = std::numeric_limits<int>::max(), hi = -1;
   for (std::size_t i = 0; i < wanted.size(); ++i) {
     const auto it = std::find(spec.channelnames.begin(), spec.channelnames.end(), wanted[i]);
     if (it == spec.channelnames.end()) throw_input(path, "has no channel '" + wanted[i] + "'");
     index[i] = static_cast<int>(it - spec.channelnames.begin());
-    lo = std::min(lo, index[i]);
-    hi = std::max(hi, index[i]);
   }
-  const int n = hi - lo + 1;
-  const std::size_t pixels = static_cast<std::size_t>(spec.width) * spec.height;
-  std::vector<float> interleaved(pixels * n);
-  if (!in.read_image(subimage, 0, lo, hi + 1, OIIO::TypeDesc::FLOAT, interleaved.data()))
-    throw_io(path, "cannot read pixels: " + detail::one_line(in.geterror()));
-  std::vector<std::vector<float>> planes(wanted.size(), std::vector<float>(pixels));
-  for (std::size_t i = 0; i < wanted.size(); ++i) {
-    const int c = index[i] - lo;
-    for (std::size_t p = 0; p < pixels; ++p) planes[i][p] = interleaved[p * n + c];
-  }
-  return planes;
+  return detail::read_float_planes(in, subimage, index, path);
 }
 
 // Values beyond this are clamped: sums of a few thousand of them stay finite in float.
@@ -157,10 +142,18 @@ Camera find_camera(const InputOptions& options, const OIIO::ImageSpec& spec, int
               "no camera: the header has no worldToCamera/worldToNDC; give --fov or --camera");
 }
 
+// What the depth conversion found, for the warning about frames without surfaces.
+struct DepthCounts {
+  std::size_t surface = 0;   // pixels with a surface in front of the camera
+  std::size_t negative = 0;  // finite stored values below 0
+  std::size_t positive = 0;  // finite stored values above 0
+};
+
 // Planar camera z from the stored depth; +inf where there is no surface.
-void convert_depth(Image& depth, DepthKind kind, double background, const Camera& camera,
-                   const Box2i& display, const Box2i& data) {
+DepthCounts convert_depth(Image& depth, DepthKind kind, double background, const Camera& camera,
+                          const Box2i& display, const Box2i& data) {
   const float inf = std::numeric_limits<float>::infinity();
+  DepthCounts counts;
   for (int y = 0; y < depth.height(); ++y) {
     for (int x = 0; x < depth.width(); ++x) {
       float& d = depth.at(0, x, y);
@@ -186,8 +179,26 @@ void convert_depth(Image& depth, DepthKind kind, double background, const Camera
       const bool surface = std::isfinite(z) && z >= std::numeric_limits<float>::min() &&
                            z < background && std::isfinite(v);
       d = surface ? static_cast<float>(z) : inf;
+      counts.surface += surface;
+      counts.negative += std::isfinite(v) && v < 0;
+      counts.positive += std::isfinite(v) && v > 0;
     }
   }
+  return counts;
+}
+
+// A frame in which (almost) nothing is a surface gets no GI: usually a wrong --depth-kind or
+// depth channel rather than an empty shot, so it is said, once per frame.
+void warn_if_no_surfaces(const DepthCounts& counts, std::size_t pixels, DepthKind kind,
+                         const std::string& path) {
+  if (counts.surface * 1000 >= pixels) return;
+  std::string why;
+  if (kind == DepthKind::kNegativeZ && counts.positive > counts.negative)
+    why = ": its depths are positive but --depth-kind is negative";
+  else if (kind != DepthKind::kNegativeZ && counts.negative > counts.positive)
+    why = ": its depths are negative (--depth-kind negative?)";
+  log_warning(path + ": " + std::to_string(counts.surface) + " of " + std::to_string(pixels) +
+              " pixels have a surface, the rest get no GI" + why);
 }
 
 // Unit camera-space normals facing the camera. World-space normals go through the inverse
@@ -393,8 +404,9 @@ GBuffer read_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
     g.depth = Image(w, h, 1);
     auto depth = role_planes(Role::kDepth);
     std::copy(depth[0].begin(), depth[0].end(), g.depth.plane(0));
-    convert_depth(g.depth, preset.depth_kind, preset.background_depth, g.camera, g.display_window,
-                  g.data_window);
+    const DepthCounts counts = convert_depth(g.depth, preset.depth_kind, preset.background_depth,
+                                             g.camera, g.display_window, g.data_window);
+    warn_if_no_surfaces(counts, g.depth.plane_size(), preset.depth_kind, path);
   }
   if (roles & role_bit(Role::kNormal)) {
     if (!seq.layout.has(Role::kNormal)) throw_input(path, "has no normal channels");

@@ -1,9 +1,11 @@
 // Writing result frames: our layers plus the input's channels and header, atomically.
+#include <Imath/half.h>
 #include <OpenImageIO/imageio.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <memory>
 #include <set>
@@ -20,49 +22,6 @@ namespace fs = std::filesystem;
 
 constexpr float kHalfMax = 65504.0f;
 
-// One output channel: its name, pixel format and where its data window values come from.
-struct OutChannel {
-  std::string name;
-  OIIO::TypeDesc format;
-  const float* source = nullptr;              // our planes
-  std::shared_ptr<std::vector<float>> owned;  // passthrough planes
-};
-
-// The input's channels, all subimages, as float planes in their original formats. Channels of
-// a named part are prefixed with the part name when they have no layer of their own (Karma's
-// per-AOV parts hold plain R, G, B), so that a single-part output keeps them apart.
-std::vector<OutChannel> read_passthrough(OIIO::ImageInput* in, const std::string& path,
-                                         const Box2i& data) {
-  std::vector<OutChannel> out;
-  int nsub = 0;
-  while (in->seek_subimage(nsub, 0)) ++nsub;
-  for (int s = 0; s < nsub; ++s) {
-    in->seek_subimage(s, 0);
-    const OIIO::ImageSpec spec = in->spec();
-    if (spec.x != data.x0 || spec.y != data.y0 || spec.width != data.width() ||
-        spec.height != data.height())
-      continue;  // a part with another data window cannot share our single part
-    const int n = spec.nchannels;
-    const std::size_t pixels = static_cast<std::size_t>(spec.width) * spec.height;
-    std::vector<float> interleaved(pixels * n);
-    if (!in->read_image(s, 0, 0, n, OIIO::TypeDesc::FLOAT, interleaved.data()))
-      throw_io(path, "cannot read pixels: " + detail::one_line(in->geterror()));
-    const std::string part = spec.get_string_attribute("oiio:subimagename");
-    for (int c = 0; c < n; ++c) {
-      OutChannel ch;
-      ch.name = spec.channelnames[c];
-      if (nsub > 1 && !part.empty() && ch.name.find('.') == std::string::npos)
-        ch.name = part + "." + ch.name;
-      ch.format = spec.channelformat(c);
-      ch.owned = std::make_shared<std::vector<float>>(pixels);
-      for (std::size_t p = 0; p < pixels; ++p) (*ch.owned)[p] = interleaved[p * n + c];
-      ch.source = ch.owned->data();
-      out.push_back(std::move(ch));
-    }
-  }
-  return out;
-}
-
 // Header attributes worth keeping from the input: everything but what describes the file's
 // own structure, which the writer sets anew.
 bool keep_attribute(const std::string& name) {
@@ -73,12 +32,78 @@ bool keep_attribute(const std::string& name) {
                                                     "oiio:BitsPerSample",
                                                     "openexr:dwaCompressionLevel",
                                                     "openexr:lineOrder",
+                                                    "openexr:levelmode",
+                                                    "openexr:roundingmode",
                                                     "name",
                                                     "type",
                                                     "version",
                                                     "chunkCount",
                                                     "tiles"};
   return kStructural.count(name) == 0;
+}
+
+void copy_attributes(const OIIO::ImageSpec& from, OIIO::ImageSpec* to) {
+  for (const OIIO::ParamValue& p : from.extra_attribs)
+    if (keep_attribute(p.name().string())) to->attribute(p.name(), p.type(), p.data());
+}
+
+Box2i data_window_of(const OIIO::ImageSpec& spec) {
+  return {spec.x, spec.y, spec.x + spec.width, spec.y + spec.height};
+}
+
+// One part of the input, as the output will carry it.
+struct InputPart {
+  int subimage = 0;
+  OIIO::ImageSpec spec;
+  bool has_mip_levels = false;
+};
+
+std::vector<InputPart> input_parts(OIIO::ImageInput& in) {
+  std::vector<InputPart> parts;
+  for (int s = 0; in.seek_subimage(s, 0); ++s) {
+    InputPart part;
+    part.subimage = s;
+    part.spec = in.spec();
+    part.has_mip_levels = in.seek_subimage(s, 1);
+    parts.push_back(std::move(part));
+  }
+  return parts;
+}
+
+std::string part_label(const InputPart& part) {
+  const std::string name = part.spec.get_string_attribute("oiio:subimagename");
+  return "part " + std::to_string(part.subimage) + (name.empty() ? "" : " (" + name + ")");
+}
+
+// Our channels, interleaved in front of the host part's native pixels (if any), in the
+// output's per-channel formats. Counts the values clamped to the half range in *clamped.
+std::vector<std::byte> interleave_host_part(const std::vector<const float*>& ours, bool half,
+                                            const std::vector<std::byte>& host_native,
+                                            std::size_t host_pixel_bytes, std::size_t pixels,
+                                            std::size_t* clamped) {
+  const std::size_t our_bytes = ours.size() * (half ? sizeof(Imath::half) : sizeof(float));
+  const std::size_t stride = our_bytes + host_pixel_bytes;
+  std::vector<std::byte> out(stride * pixels);
+  for (std::size_t p = 0; p < pixels; ++p) {
+    std::byte* px = out.data() + p * stride;
+    for (std::size_t c = 0; c < ours.size(); ++c) {
+      float v = ours[c][p];
+      if (half) {
+        // Clamped to the half range so that no value turns into inf.
+        if (std::isfinite(v) && std::fabs(v) > kHalfMax) {
+          v = std::copysign(kHalfMax, v);
+          ++*clamped;
+        }
+        const Imath::half h(v);
+        std::memcpy(px + c * sizeof(Imath::half), &h, sizeof h);
+      } else {
+        std::memcpy(px + c * sizeof(float), &v, sizeof v);
+      }
+    }
+    if (host_pixel_bytes)
+      std::memcpy(px + our_bytes, host_native.data() + p * host_pixel_bytes, host_pixel_bytes);
+  }
+  return out;
 }
 
 }  // namespace
@@ -103,6 +128,17 @@ std::string parse_compression(const std::string& spec) {
   return spec;
 }
 
+std::string parse_layer_prefix(const std::string& prefix) {
+  std::string p = prefix;
+  if (!p.empty() && p.back() == '.') p.pop_back();
+  bool ok = !p.empty() && p.front() != '.' && p.find("..") == std::string::npos;
+  for (char c : p) ok = ok && c > ' ' && c < 127;
+  if (!ok)
+    throw_usage("--layer-prefix '" + prefix +
+                "' is not a layer name (dot-separated names without spaces, e.g. ssgi)");
+  return p + ".";
+}
+
 void check_output_directory(const std::string& path) {
   const fs::path dir = fs::absolute(path).parent_path();
   std::error_code ec;
@@ -114,83 +150,146 @@ void check_output_directory(const std::string& path) {
 void write_frame(const std::string& path, const GBuffer& frame,
                  const std::vector<OutputLayer>& layers, const WriteOptions& options) {
   check_output_directory(path);
-  // The input is opened once: its header (part 0) for the metadata, its pixels to pass through.
+  // The input is opened once: its headers for the metadata, its pixels to pass through.
   auto in = detail::open_image(frame.path);
-  const OIIO::ImageSpec in_spec = in->spec();
+  const std::vector<InputPart> parts = input_parts(*in);
   const Box2i& data = frame.data_window;
   const std::size_t pixels = static_cast<std::size_t>(data.width()) * data.height();
-  const OIIO::TypeDesc our_format = options.half ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT;
 
-  std::vector<OutChannel> channels;
-  std::set<std::string> ours;
+  // Our channels go into the first input part that covers the same pixels (the host), in front
+  // of its own channels; every other part is copied as it is, in its own types and windows.
+  int host = -1;
+  for (std::size_t i = 0; i < parts.size() && host < 0; ++i)
+    if (!parts[i].spec.deep && data_window_of(parts[i].spec) == data) host = static_cast<int>(i);
+  const OIIO::ImageSpec& header = parts[host >= 0 ? host : 0].spec;
+
+  std::vector<std::string> names;
+  std::vector<const float*> ours;
+  std::set<std::string> taken;
   for (const OutputLayer& layer : layers) {
     for (std::size_t c = 0; c < layer.suffixes.size(); ++c) {
-      OutChannel ch;
-      ch.name =
-          options.layer_prefix + (layer.name.empty() ? "" : layer.name + ".") + layer.suffixes[c];
-      ch.format = our_format;
-      ch.source = layer.image->plane(static_cast<int>(c));
-      ours.insert(ch.name);
-      channels.push_back(std::move(ch));
+      names.push_back(options.layer_prefix + (layer.name.empty() ? "" : layer.name + ".") +
+                      layer.suffixes[c]);
+      ours.push_back(layer.image->plane(static_cast<int>(c)));
+      taken.insert(names.back());
     }
   }
-  if (options.passthrough) {
-    // Every output name is unique: an input channel whose name is taken (by ours, or by an
-    // earlier input channel, as when ssgi's own output is its input) gets "input." in front,
+  const OIIO::TypeDesc our_format = options.half ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT;
+  std::vector<OIIO::TypeDesc> formats(ours.size(), our_format);
+
+  OIIO::ImageSpec host_spec(data.width(), data.height(), 0, OIIO::TypeDesc::FLOAT);
+  host_spec.x = data.x0;
+  host_spec.y = data.y0;
+  host_spec.full_x = frame.display_window.x0;
+  host_spec.full_y = frame.display_window.y0;
+  host_spec.full_width = frame.display_window.width();
+  host_spec.full_height = frame.display_window.height();
+  copy_attributes(header, &host_spec);
+  for (const auto& [name, value] : options.provenance) host_spec.attribute(name, value);
+  host_spec.attribute("compression", options.compression);
+
+  std::vector<std::byte> host_native;
+  std::size_t host_pixel_bytes = 0;
+  const bool passthrough = options.passthrough;
+  if (passthrough && host >= 0) {
+    // Every name in the part is unique: an input channel whose name is taken (by ours, or by
+    // an earlier input channel, as when ssgi's own output is its input) gets "input." in front,
     // as often as it takes.
-    bool warned = false;
-    for (OutChannel& ch : read_passthrough(in.get(), frame.path, data)) {
-      if (ours.count(ch.name)) {
-        if (options.warn_collisions && !warned)
+    const OIIO::ImageSpec& hs = parts[host].spec;
+    bool renamed = false;
+    for (int c = 0; c < hs.nchannels; ++c) {
+      std::string name = hs.channelnames[c];
+      if (taken.count(name)) {
+        if (options.warn_collisions && !renamed)
           log_warning(frame.path +
                       ": input channels that share a name with ssgi's are kept as "
                       "input.<name> (e.g. input." +
-                      ch.name + ")");
-        warned = true;
-        while (ours.count(ch.name)) ch.name = "input." + ch.name;
+                      name + ")");
+        renamed = true;
+        while (taken.count(name)) name = "input." + name;
       }
-      ours.insert(ch.name);
-      channels.push_back(std::move(ch));
+      taken.insert(name);
+      names.push_back(name);
+      formats.push_back(hs.channelformat(c));
+    }
+    host_spec.tile_width = hs.tile_width;
+    host_spec.tile_height = hs.tile_height;
+    host_spec.tile_depth = hs.tile_depth;
+    host_pixel_bytes = hs.pixel_bytes(/*native=*/true);
+    host_native = detail::read_native_pixels(*in, parts[host].subimage, frame.path);
+  }
+  host_spec.nchannels = static_cast<int>(names.size());
+  host_spec.channelnames = names;
+  host_spec.channelformats = formats;
+  host_spec.format = our_format;
+  host_spec.alpha_channel = -1;
+  host_spec.z_channel = -1;
+
+  // The output's parts, in the input's order; ours first when no input part hosts them.
+  std::vector<OIIO::ImageSpec> specs;
+  std::vector<int> source;  // per output part: input part index, or -1 for the host part
+  if (host < 0 || !passthrough) {
+    specs.push_back(host_spec);
+    source.push_back(-1);
+  }
+  if (passthrough) {
+    std::set<std::string> part_names;
+    for (std::size_t i = 0; i < parts.size(); ++i) {
+      const InputPart& part = parts[i];
+      if (static_cast<int>(i) == host) {
+        specs.push_back(host_spec);
+        source.push_back(-1);
+      } else if (part.spec.deep) {
+        if (options.warn_collisions)
+          log_warning(frame.path + ": " + part_label(part) +
+                      " holds deep data, which ssgi does not pass through");
+        continue;
+      } else {
+        OIIO::ImageSpec spec = part.spec;
+        spec.extra_attribs.clear();
+        copy_attributes(part.spec, &spec);
+        spec.attribute("compression", part.spec.get_string_attribute("compression", "zip"));
+        specs.push_back(std::move(spec));
+        source.push_back(static_cast<int>(i));
+      }
+      if (part.has_mip_levels && options.warn_collisions)
+        log_warning(frame.path + ": " + part_label(part) +
+                    " is mip-mapped: only its full-resolution level is passed through");
+    }
+    // A multi-part file needs a unique name per part.
+    if (specs.size() > 1) {
+      for (std::size_t k = 0; k < specs.size(); ++k) {
+        const int from = source[k] >= 0 ? source[k] : host;
+        std::string name =
+            from >= 0 ? parts[from].spec.get_string_attribute("oiio:subimagename") : "ssgi";
+        if (name.empty()) name = "part" + std::to_string(k);
+        while (part_names.count(name)) name += "_";
+        part_names.insert(name);
+        specs[k].attribute("oiio:subimagename", name);
+      }
     }
   }
 
-  in.reset();
+  std::size_t clamped = 0;
+  const std::vector<std::byte> host_pixels =
+      interleave_host_part(ours, options.half, host_native, host_pixel_bytes, pixels, &clamped);
+  host_native = {};
+  if (clamped > 0)
+    log_warning(path + ": " + std::to_string(clamped) +
+                " values of ssgi's layers beyond the half-float range were clamped to "
+                "+-65504 (--datatype float keeps them)");
 
-  const int n = static_cast<int>(channels.size());
-  OIIO::ImageSpec spec(data.width(), data.height(), n, OIIO::TypeDesc::FLOAT);
-  spec.x = data.x0;
-  spec.y = data.y0;
-  spec.full_x = frame.display_window.x0;
-  spec.full_y = frame.display_window.y0;
-  spec.full_width = frame.display_window.width();
-  spec.full_height = frame.display_window.height();
-  spec.channelnames.clear();
-  spec.channelformats.clear();
-  spec.alpha_channel = -1;
-  spec.z_channel = -1;
-  for (const OutChannel& ch : channels) {
-    spec.channelnames.push_back(ch.name);
-    spec.channelformats.push_back(ch.format);
-  }
-  for (const OIIO::ParamValue& p : in_spec.extra_attribs)
-    if (keep_attribute(p.name().string())) spec.attribute(p.name(), p.type(), p.data());
-  for (const auto& [name, value] : options.provenance) spec.attribute(name, value);
-  spec.attribute("compression", options.compression);
-
-  // Interleave; our channels are clamped to the half range when written as half, so that no
-  // value turns into inf.
-  std::vector<float> interleaved(pixels * n);
-  for (int c = 0; c < n; ++c) {
-    const bool clamp_half = channels[c].format == OIIO::TypeDesc::HALF;
-    const float* src = channels[c].source;
-    for (std::size_t p = 0; p < pixels; ++p) {
-      float v = src[p];
-      if (clamp_half && std::isfinite(v)) v = std::clamp(v, -kHalfMax, kHalfMax);
-      interleaved[p * n + c] = v;
+  detail::AtomicImageWriter writer(path, specs, "frame");
+  for (std::size_t k = 0; k < specs.size(); ++k) {
+    if (source[k] < 0) {
+      writer.write_part(OIIO::TypeUnknown, host_pixels.data());
+    } else {
+      const std::vector<std::byte> native =
+          detail::read_native_pixels(*in, parts[source[k]].subimage, frame.path);
+      writer.write_part(OIIO::TypeUnknown, native.data());
     }
   }
-
-  detail::write_image_atomically(path, spec, interleaved.data(), "frame");
+  writer.commit();
 }
 
 }  // namespace ssgi

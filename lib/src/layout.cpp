@@ -480,6 +480,22 @@ bool match_layer(const ChannelIndex& index, Role role, const std::string& layer,
       }
     }
   }
+  // A one-channel role also takes a layer of a single channel, whatever its component is
+  // called (`zdist.Y`).
+  if (role_max_components(role) == 1 && !layer.empty()) {
+    const std::string head = layer + ".";
+    const int first = only_subimage >= 0 ? only_subimage : 0;
+    const int last = only_subimage >= 0 ? only_subimage + 1 : index.subimage_count();
+    for (int s = first; s < last; ++s) {
+      std::vector<std::string> found;
+      for (const std::string& name : index.channels(s))
+        if (starts_with(name, head) && name.find('.', head.size()) == std::string::npos)
+          found.push_back(name);
+      if (found.size() != 1) continue;
+      *out = {{s, found[0]}};
+      return true;
+    }
+  }
   return false;
 }
 

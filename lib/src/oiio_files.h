@@ -1,11 +1,14 @@
-// Small OIIO helpers shared by the reader, the writer and `compare` (internal: uses OIIO
-// types): one-line messages, opening an image with a clear error, writing atomically.
+// The one boundary between ssgi and OpenImageIO's files (internal: uses OIIO types): opening an
+// image with a clear error, reading channel ranges as float planes or in their own formats, and
+// writing whole files atomically. The reader, the writer and `compare` all go through it.
 #pragma once
 
 #include <OpenImageIO/imageio.h>
 
+#include <cstddef>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace ssgi::detail {
 
@@ -16,10 +19,46 @@ std::string one_line(std::string message);
 // directory or empty, or OIIO cannot read it.
 std::unique_ptr<OIIO::ImageInput> open_image(const std::string& path);
 
-// Writes `spec` with `interleaved` float pixels to `path` through a hidden temporary file in
-// the same directory (keeping the extension, which tells OIIO the format), renamed into place,
-// so that a failure never leaves a partial file. Throws Error(kIO) naming `path`, with `what`
-// ("frame", "difference image") in the message.
+// Reads channels `indices` (of subimage `subimage`, any order) as one float plane each, with a
+// single read of the range that covers them: OIIO 2.4 decompresses every ZIP block again for
+// each read. Throws Error(kIO) naming `path` when the pixels cannot be read.
+std::vector<std::vector<float>> read_float_planes(OIIO::ImageInput& in, int subimage,
+                                                  const std::vector<int>& indices,
+                                                  const std::string& path);
+
+// Reads every channel of subimage `subimage` (top mip level) in the file's own per-channel
+// formats, interleaved (spec.pixel_bytes(true) bytes per pixel): uint32 IDs and half passes
+// come back bit for bit. Throws Error(kIO) naming `path`.
+std::vector<std::byte> read_native_pixels(OIIO::ImageInput& in, int subimage,
+                                          const std::string& path);
+
+// A file written through a hidden temporary file in the same directory (keeping the extension,
+// which tells OIIO the format) and renamed into place by commit(). Destroyed before commit(), it
+// removes the temporary file, so a failure never leaves a partial file under any name.
+class AtomicImageWriter {
+ public:
+  // Opens the temporary file for `parts` (one spec per part, written in order). `what`
+  // ("frame", "difference image") names the file in messages. Throws Error(kIO) naming `path`.
+  AtomicImageWriter(const std::string& path, std::vector<OIIO::ImageSpec> parts, std::string what);
+  ~AtomicImageWriter();
+  AtomicImageWriter(const AtomicImageWriter&) = delete;
+  AtomicImageWriter& operator=(const AtomicImageWriter&) = delete;
+
+  // Writes the next part's pixels, interleaved, all in `format`, or in the part's own
+  // per-channel formats when `format` is OIIO::TypeUnknown.
+  void write_part(OIIO::TypeDesc format, const void* pixels);
+  // Closes the file and renames it into place; every part must have been written.
+  void commit();
+
+ private:
+  [[noreturn]] void fail(const std::string& why);
+  std::string path_, tmp_, what_;
+  std::vector<OIIO::ImageSpec> parts_;
+  std::unique_ptr<OIIO::ImageOutput> out_;
+  std::size_t written_ = 0;
+};
+
+// Writes one part of float pixels atomically (see AtomicImageWriter).
 void write_image_atomically(const std::string& path, const OIIO::ImageSpec& spec,
                             const float* interleaved, const std::string& what);
 

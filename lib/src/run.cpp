@@ -59,7 +59,13 @@ int RunReport::failed() const {
 
 RunReport run_sequence(const RunOptions& options, const FrameCallback& on_frame) {
   const SequenceInfo seq = open_sequence(options.input);
-  const SequencePattern out = parse_sequence_pattern(options.output);
+  std::vector<int> frames_in_output;
+  const SequencePattern out = parse_sequence_pattern(options.output, &frames_in_output);
+  // The frames to write come from the input; a range in the output name would be ignored.
+  if (!frames_in_output.empty())
+    throw_usage("output '" + options.output +
+                "' names frames: give the frames with the input pattern or --frames, and the "
+                "output as e.g. out/shot.####.exr");
   check_outputs(seq, out, options.output);
   const Pipeline pipeline(seq, options.gi);
   const Plan& plan = pipeline.plan();

@@ -82,6 +82,11 @@ struct WriteOptions {
 // returns OIIO's spelling. Throws Error(kUsage) otherwise.
 std::string parse_compression(const std::string& spec);
 
+// Validates --layer-prefix (one or more dot-separated names, e.g. "ssgi" or "gi.v2", each of
+// printable characters other than space) and returns it with its trailing '.'. Throws
+// Error(kUsage) otherwise.
+std::string parse_layer_prefix(const std::string& prefix);
+
 // Throws Error(kIO) naming `path` unless the directory `path` would be written into exists.
 void check_output_directory(const std::string& path);
 
