@@ -53,6 +53,8 @@ struct Report {
     std::string error;
   };
   std::vector<FrameCamera> cameras;
+  std::string preset;                                         // --preset, resolved
+  std::vector<std::pair<std::string, std::string>> settings;  // with the options applied
   std::optional<ssgi::Plan> plan;
   std::optional<ssgi::Error> problem;  // the first input problem, reported last
 };
@@ -66,6 +68,8 @@ void print_json(const ssgi::InputOptions& in, const ssgi::SequenceInfo& seq, con
   Json channels = Json::object();
   for (int k = 0; k < ssgi::kRoleCount; ++k)
     channels[ssgi::role_name(static_cast<ssgi::Role>(k))] = r.role_channels[k];
+  Json settings = Json::object();
+  for (const auto& [name, value] : r.settings) settings[name] = value;
   Json cameras = Json::array();
   for (const Report::FrameCamera& c : r.cameras) {
     if (c.camera)
@@ -92,6 +96,8 @@ void print_json(const ssgi::InputOptions& in, const ssgi::SequenceInfo& seq, con
         {"direct_includes_albedo", preset.direct_includes_albedo},
         {"channels", channels}}},
       {"cameras", cameras},
+      {"preset", r.preset},
+      {"settings", settings},
       {"plan", r.plan ? Json(r.plan->reasons) : Json(nullptr)},
       {"error", r.problem ? Json(r.problem->what()) : Json(nullptr)},
   };
@@ -132,6 +138,9 @@ void print_text(const ssgi::InputOptions& in, const ssgi::SequenceInfo& seq, con
     else
       std::printf("  frame %-6d none: %s\n", c.frame, c.error.c_str());
   }
+  std::printf("settings (preset %s):\n", r.preset.c_str());
+  for (const auto& [name, value] : r.settings)
+    std::printf("  %-14s %s\n", name.c_str(), value.c_str());
   std::printf("plan:\n");
   if (r.plan) {
     for (const std::string& reason : r.plan->reasons) std::printf("  %s\n", reason.c_str());
@@ -149,6 +158,7 @@ int run_info(int argc, char** argv) {
     return kExitOk;
   }
   if (o.given.count("spp")) ssgi::throw_usage("--spp is for ssgi reference");
+  if (o.given.count("stats")) ssgi::throw_usage("--stats is for ssgi run");
   install_log_handler(o.verbose, o.quiet);
   const ssgi::ThreadLimit threads(o.threads);
   const ssgi::InputOptions& in = o.run.input;
@@ -156,6 +166,8 @@ int run_info(int argc, char** argv) {
   // Bad option values fail before anything is printed; input problems (no camera, no direct
   // light) are reported in their place and the report goes on, then exit with the first one.
   Report r;
+  r.preset = o.preset;
+  r.settings = ssgi::describe_settings(o.run.gi);
   try {
     r.plan = ssgi::make_plan(seq, o.run.gi);
   } catch (const ssgi::Error& e) {

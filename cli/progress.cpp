@@ -2,8 +2,13 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "commands.h"
 #include "ssgi/error.h"
@@ -16,6 +21,57 @@ int exit_code_for(ssgi::ErrorKind kind) {
   return kind == ssgi::ErrorKind::kInput   ? kExitInput
          : kind == ssgi::ErrorKind::kUsage ? kExitUsage
                                            : kExitIO;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// --stats: the frames' timings and the settings, as JSON, written whole or not at all.
+void write_stats(const std::string& path, const CommonOptions& o, const ssgi::RunReport& report) {
+  using Json = nlohmann::ordered_json;
+  Json settings = Json::object();
+  settings["preset"] = o.preset;
+  for (const auto& [name, value] : ssgi::describe_settings(o.run.gi)) settings[name] = value;
+  Json frames = Json::array();
+  std::vector<double> read, gi, write;
+  for (const ssgi::FrameReport& f : report.frames) {
+    Json j = {{"frame", f.frame}, {"input", f.input}, {"output", f.output}, {"ok", f.ok}};
+    if (f.ok) {
+      j["read_ms"] = f.read_ms;
+      j["gi_ms"] = f.gi_ms;
+      j["write_ms"] = f.write_ms;
+      read.push_back(f.read_ms);
+      gi.push_back(f.gi_ms);
+      write.push_back(f.write_ms);
+    } else {
+      j["error"] = f.error;
+    }
+    frames.push_back(std::move(j));
+  }
+  const Json out = {
+      {"settings", settings},
+      {"median", {{"read_ms", median(read)}, {"gi_ms", median(gi)}, {"write_ms", median(write)}}},
+      {"frames", frames}};
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream file(tmp);
+    file << out.dump(2) << "\n";
+    if (!file.good()) {
+      std::error_code ec;
+      std::filesystem::remove(tmp, ec);
+      throw ssgi::Error(ssgi::ErrorKind::kIO, path, "cannot write the statistics");
+    }
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::filesystem::remove(tmp, ec);
+    throw ssgi::Error(ssgi::ErrorKind::kIO, path, "cannot write the statistics");
+  }
 }
 
 }  // namespace
@@ -46,6 +102,7 @@ int run_with_progress(const CommonOptions& o) {
         }
         std::fflush(stderr);
       });
+  if (!o.stats.empty()) write_stats(o.stats, o, report);
   const int failed = report.failed();
   if (failed == 0) return kExitOk;
   if (failed < static_cast<int>(report.frames.size())) return kExitSomeFramesFailed;

@@ -25,6 +25,9 @@ enum LongOnly : int {
   kFov,
   kCamera,
   kRays,
+  kTracer,
+  kSlices,
+  kTraceScale,
   kMaxSteps,
   kMaxDistance,
   kThickness,
@@ -45,6 +48,8 @@ enum LongOnly : int {
   kTemporal,
   kSpp,
   kJson,
+  kStats,
+  kPreset,
   kSeed,
   kThreads,
   kCompression,
@@ -63,6 +68,9 @@ const option kOptions[] = {
     {"fov", required_argument, nullptr, kFov},
     {"camera", required_argument, nullptr, kCamera},
     {"rays", required_argument, nullptr, kRays},
+    {"tracer", required_argument, nullptr, kTracer},
+    {"slices", required_argument, nullptr, kSlices},
+    {"trace-scale", required_argument, nullptr, kTraceScale},
     {"max-steps", required_argument, nullptr, kMaxSteps},
     {"max-distance", required_argument, nullptr, kMaxDistance},
     {"thickness", required_argument, nullptr, kThickness},
@@ -83,6 +91,8 @@ const option kOptions[] = {
     {"temporal", required_argument, nullptr, kTemporal},
     {"spp", required_argument, nullptr, kSpp},
     {"json", no_argument, nullptr, kJson},
+    {"stats", required_argument, nullptr, kStats},
+    {"preset", required_argument, nullptr, kPreset},
     {"seed", required_argument, nullptr, kSeed},
     {"threads", required_argument, nullptr, kThreads},
     {"compression", required_argument, nullptr, kCompression},
@@ -164,8 +174,13 @@ const char* common_options_help() {
          "  --fov DEGREES         static camera with this horizontal field of view\n"
          "  --camera FILE.json    per-frame cameras from a sidecar file\n"
          "gi:\n"
-         "  --rays N              rays per pixel and bounce (default 8)\n"
-         "  --max-steps N         march samples per ray at most (default 64)\n"
+         "  --preset P            draft, default or final: the tracing settings below (man\n"
+         "                        ssgi, PRESETS); options given override it\n"
+         "  --tracer T            slices (default) or march\n"
+         "  --slices N            slices per traced pixel, 32 directions each (default 2)\n"
+         "  --trace-scale N       trace one pixel in NxN: 1, 2 (default) or 4\n"
+         "  --max-steps N         samples per slice side or per march ray (default 24)\n"
+         "  --rays N              march: rays per pixel and bounce (default 8)\n"
          "  --max-distance D      longest ray in scene units, 0 = unlimited (default 0)\n"
          "  --thickness T         a depth pixel is a slab from z to z*(1+T) (default 0.1)\n"
          "  --start-offset F      rays start F*depth off the surface (default 0.002)\n"
@@ -182,6 +197,8 @@ const char* common_options_help() {
          "  --denoise-normal-power P, --denoise-blur N   denoise parameters (man ssgi)\n"
          "  --spp N               ssgi reference only: rays per pixel (default 256)\n"
          "  --json                ssgi info only: the report as JSON on stdout\n"
+         "  --stats FILE.json     ssgi run only: per-frame read_ms, gi_ms, write_ms and the\n"
+         "                        settings\n"
          "  --temporal MODE       window[:K] (default, K = 2), ema[:ALPHA] (default 0.1) or\n"
          "                        none\n"
          "  --seed N              noise seed (default 0)\n"
@@ -207,6 +224,14 @@ CommonOptions parse_common_options(int argc, char** argv, bool need_output) {
   optind = 0;  // getopt_long: restart (0 also resets GNU's internal state)
   opterr = 0;
   bool env_color_given = false;
+  // The preset first, whatever its place: the options given override what it sets.
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (arg == "--") break;
+    if (arg == "--preset" && i + 1 < argc) o.preset = argv[i + 1];
+    if (arg.rfind("--preset=", 0) == 0) o.preset = arg.substr(9);
+  }
+  ssgi::apply_preset(o.preset, &gi);
   int c;
   int option_index = -1;
   while ((c = getopt_long(argc, argv, ":o:vqh", kOptions, &option_index)) != -1) {
@@ -246,6 +271,22 @@ CommonOptions parse_common_options(int argc, char** argv, bool need_output) {
         break;
       case kRays:
         gi.rays = static_cast<int>(parse_long("rays", a, 1, 4096));
+        break;
+      case kTracer: {
+        const std::string t = a;
+        if (t == "slices")
+          gi.tracer = ssgi::Tracer::kSlices;
+        else if (t == "march")
+          gi.tracer = ssgi::Tracer::kScreenSpace;
+        else
+          ssgi::throw_usage("--tracer must be slices or march");
+        break;
+      }
+      case kSlices:
+        gi.slices = static_cast<int>(parse_long("slices", a, 1, 256));
+        break;
+      case kTraceScale:
+        gi.trace_scale = static_cast<int>(parse_long("trace-scale", a, 1, 4));
         break;
       case kMaxSteps:
         gi.max_steps = static_cast<int>(parse_long("max-steps", a, 1, 1 << 20));
@@ -333,6 +374,12 @@ CommonOptions parse_common_options(int argc, char** argv, bool need_output) {
       case kJson:
         o.json = true;
         break;
+      case kStats:
+        if (*a == '\0') ssgi::throw_usage("--stats needs a file name");
+        o.stats = a;
+        break;
+      case kPreset:
+        break;  // applied before the other options (see above)
       case kSeed:
         gi.seed = static_cast<std::uint32_t>(parse_long("seed", a, 0, 4294967295L));
         break;

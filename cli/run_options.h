@@ -15,10 +15,12 @@ struct CommonOptions {
   bool verbose = false;
   bool quiet = false;
   bool help = false;
-  std::string command_line;     // the whole invocation, for provenance
-  int spp = 0;                  // --spp (ssgi reference), 0 when not given
-  bool json = false;            // --json (ssgi info)
-  std::set<std::string> given;  // the long names of the options given, e.g. "denoise"
+  std::string command_line;        // the whole invocation, for provenance
+  int spp = 0;                     // --spp (ssgi reference), 0 when not given
+  bool json = false;               // --json (ssgi info)
+  std::string stats;               // --stats FILE.json (ssgi run)
+  std::string preset = "default";  // --preset
+  std::set<std::string> given;     // the long names of the options given, e.g. "denoise"
 };
 
 // Parses argv (argv[0] is the subcommand). `need_output` makes -o required. Throws

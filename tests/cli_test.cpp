@@ -301,7 +301,7 @@ TEST_F(Cli, InfoReportsTheSampleSequence) {
   }
   const std::size_t plan = r.out.find("\nplan:\n");
   ASSERT_NE(plan, std::string::npos);
-  EXPECT_NE(r.out.find("  march: ", plan), std::string::npos);
+  EXPECT_NE(r.out.find("  trace: slices (visibility bitmask), 2 slices", plan), std::string::npos);
   EXPECT_NE(r.out.find("  composite: ", plan), std::string::npos);
 }
 
@@ -1020,6 +1020,62 @@ TEST_F(Cli, OneChannelLayerIsFoundByItsName) {
   const std::vector<float> got = read_exr(path("z_out.exr")).planes.at("indirect.R");
   EXPECT_EQ(got, read_exr(path("plain.exr")).planes.at("indirect.R"));
   EXPECT_GT(*std::max_element(got.begin(), got.end()), 0.0f);
+}
+
+TEST_F(Cli, PresetsSetTheirSettingsAndGivenOptionsOverrideThem) {
+  // info shows the resolved settings: each preset's row, and an option given wins wherever it
+  // stands on the command line.
+  const std::string in = testdata("sample/sample.0001.exr");
+  auto settings_of = [&](const std::vector<std::string>& extra) {
+    std::vector<std::string> args = {"info", in, "--json"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const CliResult r = run_ssgi(args);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return nlohmann::json::parse(r.out, nullptr, false);
+  };
+  const nlohmann::json plain = settings_of({});
+  EXPECT_EQ(plain["preset"], "default");
+  EXPECT_EQ(plain["settings"]["slices"], "2");
+  EXPECT_EQ(plain["settings"]["trace-scale"], "2");
+  const nlohmann::json draft = settings_of({"--preset", "draft"});
+  EXPECT_EQ(draft["settings"]["slices"], "1");
+  EXPECT_EQ(draft["settings"]["trace-scale"], "4");
+  EXPECT_EQ(draft["settings"]["bounces"], "4");
+  const nlohmann::json fin = settings_of({"--slices", "3", "--preset=final"});
+  EXPECT_EQ(fin["preset"], "final");
+  EXPECT_EQ(fin["settings"]["slices"], "3");  // given, so not the preset's 6
+  EXPECT_EQ(fin["settings"]["trace-scale"], "1");
+  EXPECT_EQ(fin["settings"]["max-steps"], "32");
+  expect_usage_error(run_ssgi({"info", in, "--preset", "best"}), "info",
+                     "unknown --preset 'best' (draft, default, final)");
+}
+
+TEST_F(Cli, StatsRecordEachFramesTimingsAndTheSettings) {
+  const CliResult r = run_ssgi({"run", testdata("sample/sample.1-3#.exr"), "-o", path("o.####.exr"),
+                                "-q", "--preset", "draft", "--stats", path("stats.json")});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream file(path("stats.json"));
+  const nlohmann::json stats = nlohmann::json::parse(file, nullptr, false);
+  ASSERT_FALSE(stats.is_discarded());
+  EXPECT_EQ(stats["settings"]["preset"], "draft");
+  EXPECT_EQ(stats["settings"]["tracer"], "slices");
+  ASSERT_EQ(stats["frames"].size(), 3u);
+  for (int i = 0; i < 3; ++i) {
+    const nlohmann::json& f = stats["frames"][i];
+    EXPECT_EQ(f["frame"], i + 1);
+    EXPECT_EQ(f["ok"], true);
+    // Every frame reads, computes and writes something: each time is positive.
+    for (const char* key : {"read_ms", "gi_ms", "write_ms"}) {
+      ASSERT_TRUE(f[key].is_number()) << key;
+      EXPECT_GT(f[key].get<double>(), 0.0) << key;
+    }
+  }
+  EXPECT_GT(stats["median"]["gi_ms"].get<double>(), 0.0);
+  // No temporary file left beside it; info refuses the option.
+  EXPECT_EQ(entries(),
+            (std::set<std::string>{"o.0001.exr", "o.0002.exr", "o.0003.exr", "stats.json"}));
+  expect_usage_error(run_ssgi({"info", testdata("sample/sample.0001.exr"), "--stats", "s.json"}),
+                     "info", "--stats is for ssgi run");
 }
 
 }  // namespace

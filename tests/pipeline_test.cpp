@@ -28,6 +28,10 @@ FrameResult run(const Frame& f, const GiSettings& settings) {
   return pipeline.composite(f.g, pipeline.indirect_light(f.g));
 }
 
+// Every tracer follows the same surface model and miss rules: the known answers hold for each.
+const Tracer kTracers[] = {Tracer::kSlices, Tracer::kScreenSpace};
+const char* tracer_name(Tracer t) { return t == Tracer::kSlices ? "slices" : "march"; }
+
 void expect_all_finite(const Image& img) {
   for (float v : img.data()) ASSERT_TRUE(std::isfinite(v));
 }
@@ -35,50 +39,60 @@ void expect_all_finite(const Image& img) {
 // A camera inside a closed box whose every surface reflects L = 0.5, misses returning L too:
 // every ray, hit or miss, brings L, so one bounce gives exactly L (the 1% bound).
 TEST(Pipeline, FurnaceOneBounceIsL) {
-  GiSettings s;
-  s.bounces = 1;
-  s.miss = MissMode::kEnvironment;
-  s.env_color = {0.5f, 0.5f, 0.5f};
-  const Frame f = load("furnace/furnace.0001.exr", s);
-  const FrameResult r = run(f, s);
-  for (int c = 0; c < 3; ++c)
-    for (std::size_t p = 0; p < r.indirect.plane_size(); ++p)
-      ASSERT_NEAR(r.indirect.plane(c)[p], 0.5f, 0.005f);
+  for (Tracer tracer : kTracers) {
+    SCOPED_TRACE(tracer_name(tracer));
+    GiSettings s;
+    s.tracer = tracer;
+    s.bounces = 1;
+    s.miss = MissMode::kEnvironment;
+    s.env_color = {0.5f, 0.5f, 0.5f};
+    const Frame f = load("furnace/furnace.0001.exr", s);
+    const FrameResult r = run(f, s);
+    for (int c = 0; c < 3; ++c)
+      for (std::size_t p = 0; p < r.indirect.plane_size(); ++p)
+        ASSERT_NEAR(r.indirect.plane(c)[p], 0.5f, 0.005f);
+  }
 }
 
 // With misses estimated from the frame every ray brings the frame's mean light, so N bounces
 // over albedo 0.5 give the geometric series 0.5 (1 + 0.5 + ... + 0.5^(N-1)) = 1 - 0.5^N.
 TEST(Pipeline, FurnaceBouncesFollowTheGeometricSeries) {
-  for (int bounces : {2, 4, 8}) {
-    GiSettings s;
-    s.bounces = bounces;
-    s.miss = MissMode::kFrame;
-    const Frame f = load("furnace/furnace.0001.exr", s);
-    const FrameResult r = run(f, s);
-    const float expected = 1.0f - std::pow(0.5f, static_cast<float>(bounces));
-    for (std::size_t p = 0; p < r.indirect.plane_size(); ++p)
-      ASSERT_NEAR(r.indirect.plane(0)[p], expected, 0.01f * expected) << "bounces " << bounces;
-  }
+  for (Tracer tracer : kTracers)
+    for (int bounces : {2, 4, 8}) {
+      GiSettings s;
+      s.tracer = tracer;
+      s.bounces = bounces;
+      s.miss = MissMode::kFrame;
+      const Frame f = load("furnace/furnace.0001.exr", s);
+      const FrameResult r = run(f, s);
+      const float expected = 1.0f - std::pow(0.5f, static_cast<float>(bounces));
+      for (std::size_t p = 0; p < r.indirect.plane_size(); ++p)
+        ASSERT_NEAR(r.indirect.plane(0)[p], expected, 0.01f * expected) << "bounces " << bounces;
+    }
 }
 
 // A lone plane cannot see itself: under a black environment every ray misses and indirect is
 // exactly 0; under a constant environment C it is C (to float rounding of the denoiser).
 TEST(Pipeline, LonePlaneSeesOnlyTheEnvironment) {
-  GiSettings s;
-  s.miss = MissMode::kEnvironment;
-  s.rays = 16;
-  const Frame f = load("plane/plane.0001.exr", s);
-  const FrameResult black = run(f, s);
-  for (float v : black.indirect.data()) ASSERT_EQ(v, 0.0f);
+  for (Tracer tracer : kTracers) {
+    SCOPED_TRACE(tracer_name(tracer));
+    GiSettings s;
+    s.tracer = tracer;
+    s.miss = MissMode::kEnvironment;
+    s.rays = 16;
+    const Frame f = load("plane/plane.0001.exr", s);
+    const FrameResult black = run(f, s);
+    for (float v : black.indirect.data()) ASSERT_EQ(v, 0.0f);
 
-  s.env_color = {0.2f, 0.4f, 0.8f};
-  const FrameResult lit = run(f, s);
-  for (int y = 0; y < f.g.height(); ++y)
-    for (int x = 0; x < f.g.width(); ++x) {
-      if (!f.g.is_surface(x, y)) continue;
-      for (int c = 0; c < 3; ++c)
-        ASSERT_NEAR(lit.indirect.at(c, x, y), s.env_color[c], 1e-5f * s.env_color[c]);
-    }
+    s.env_color = {0.2f, 0.4f, 0.8f};
+    const FrameResult lit = run(f, s);
+    for (int y = 0; y < f.g.height(); ++y)
+      for (int x = 0; x < f.g.width(); ++x) {
+        if (!f.g.is_surface(x, y)) continue;
+        for (int c = 0; c < 3; ++c)
+          ASSERT_NEAR(lit.indirect.at(c, x, y), s.env_color[c], 1e-5f * s.env_color[c]);
+      }
+  }
 }
 
 // Indirect light is a mean of what rays bring, and the denoiser a convex combination, so one
@@ -86,44 +100,51 @@ TEST(Pipeline, LonePlaneSeesOnlyTheEnvironment) {
 // input has NaN and infinite samples (read as 0, not as huge light).
 TEST(Pipeline, OneBounceNeverExceedsTheBrightestSource) {
   for (const char* pattern : {"sample/sample.####.exr", "bad/nan.0001.exr"})
-    for (MissMode miss : {MissMode::kEnvironment, MissMode::kFrame, MissMode::kAuto}) {
-      SCOPED_TRACE(pattern);
-      GiSettings s;
-      s.bounces = 1;
-      s.miss = miss;
-      s.env_color = {0.3f, 0.3f, 0.3f};
-      const Frame f = load(pattern, s);
-      const FrameResult r = run(f, s);
-      for (int c = 0; c < 3; ++c) {
-        float brightest = s.env_color[c];
-        for (std::size_t p = 0; p < f.g.direct.plane_size(); ++p)
-          if (std::isfinite(f.g.depth.plane(0)[p]))
-            brightest = std::max(brightest, f.g.direct.plane(c)[p]);
-        for (float v :
-             std::vector<float>(r.indirect.plane(c), r.indirect.plane(c) + r.indirect.plane_size()))
-          ASSERT_LE(v, brightest * (1 + 1e-6f));
+    for (MissMode miss : {MissMode::kEnvironment, MissMode::kFrame, MissMode::kAuto})
+      for (Tracer tracer : kTracers) {
+        SCOPED_TRACE(pattern);
+        GiSettings s;
+        s.tracer = tracer;
+        s.bounces = 1;
+        s.miss = miss;
+        s.env_color = {0.3f, 0.3f, 0.3f};
+        const Frame f = load(pattern, s);
+        const FrameResult r = run(f, s);
+        for (int c = 0; c < 3; ++c) {
+          float brightest = s.env_color[c];
+          for (std::size_t p = 0; p < f.g.direct.plane_size(); ++p)
+            if (std::isfinite(f.g.depth.plane(0)[p]))
+              brightest = std::max(brightest, f.g.direct.plane(c)[p]);
+          for (float v : std::vector<float>(r.indirect.plane(c),
+                                            r.indirect.plane(c) + r.indirect.plane_size()))
+            ASSERT_LE(v, brightest * (1 + 1e-6f));
+        }
       }
-    }
 }
 
 // A scene mirror-symmetric about the image's centre column gives a mirror-symmetric result up
 // to the noise, which is not symmetric (IGN is not): the mean difference between a pixel and its
 // mirror stays a few percent of the mean.
 TEST(Pipeline, MirrorSymmetricSceneGivesSymmetricResult) {
-  GiSettings s;
-  s.rays = 32;
-  const Frame f = load("symmetric/symmetric.0001.exr", s);
-  const FrameResult r = run(f, s);
-  const int w = f.g.width(), h = f.g.height();
-  double diff = 0, sum = 0;
-  for (int c = 0; c < 3; ++c)
-    for (int y = 0; y < h; ++y)
-      for (int x = 0; x < w; ++x) {
-        diff += std::fabs(r.indirect.at(c, x, y) - r.indirect.at(c, w - 1 - x, y));
-        sum += r.indirect.at(c, x, y);
-      }
-  ASSERT_GT(sum, 0);
-  EXPECT_LT(diff / sum, 0.05);
+  for (Tracer tracer : kTracers) {
+    SCOPED_TRACE(tracer_name(tracer));
+    GiSettings s;
+    s.tracer = tracer;
+    s.slices = 16;
+    s.rays = 32;
+    const Frame f = load("symmetric/symmetric.0001.exr", s);
+    const FrameResult r = run(f, s);
+    const int w = f.g.width(), h = f.g.height();
+    double diff = 0, sum = 0;
+    for (int c = 0; c < 3; ++c)
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+          diff += std::fabs(r.indirect.at(c, x, y) - r.indirect.at(c, w - 1 - x, y));
+          sum += r.indirect.at(c, x, y);
+        }
+    ASSERT_GT(sum, 0);
+    EXPECT_LT(diff / sum, 0.05);
+  }
 }
 
 // The same bits for 1 and 2 threads, and run to run.
@@ -151,17 +172,20 @@ TEST(Pipeline, OutputsAreFiniteOnEveryFixture) {
        {"sample/sample.####.exr", "furnace/furnace.0001.exr", "plane/plane.0001.exr",
         "symmetric/symmetric.0001.exr", "moving/moving.####.exr", "overscan/overscan.0001.exr",
         "crop/crop.0001.exr", "bad/nan.0001.exr"}) {
-    for (MissMode miss : {MissMode::kAuto, MissMode::kExtend}) {
-      GiSettings s;
-      s.rays = 4;
-      s.miss = miss;
-      const Frame f = load(pattern, s);
-      const FrameResult r = run(f, s);
-      SCOPED_TRACE(pattern);
-      expect_all_finite(r.indirect);
-      expect_all_finite(r.gi);
-      expect_all_finite(r.composite);
-    }
+    for (MissMode miss : {MissMode::kAuto, MissMode::kExtend})
+      for (Tracer tracer : kTracers) {
+        if (tracer == Tracer::kSlices && miss == MissMode::kExtend) continue;  // march only
+        GiSettings s;
+        s.tracer = tracer;
+        s.rays = 4;
+        s.miss = miss;
+        const Frame f = load(pattern, s);
+        const FrameResult r = run(f, s);
+        SCOPED_TRACE(pattern);
+        expect_all_finite(r.indirect);
+        expect_all_finite(r.gi);
+        expect_all_finite(r.composite);
+      }
   }
 }
 
@@ -210,28 +234,32 @@ std::string write_two_tone_env(const std::string& name, float upper, float lower
 // map's own +Y up, world +Z is horizontal in the map, half the cosine-weighted hemisphere is
 // bright, so indirect = 0.5 up to the sampling noise, which the denoiser averages down.
 TEST(Pipeline, EnvironmentMapFollowsItsUpAxis) {
-  const std::string env = write_two_tone_env("two_tone", 1.0f, 0.0f);
-  GiSettings s;
-  s.miss = MissMode::kEnvironment;
-  s.env_map = env;
-  s.rays = 64;
-  s.bounces = 1;
-  const Frame f = load("plane/plane.0001.exr", s);
-  for (char up : {'z', 'y'}) {
-    s.env_up = up;
-    const FrameResult r = run(f, s);
-    double sum = 0;
-    int n = 0;
-    for (int y = 0; y < f.g.height(); ++y)
-      for (int x = 0; x < f.g.width(); ++x)
-        if (f.g.is_surface(x, y)) {
-          sum += r.indirect.at(0, x, y);
-          ++n;
-        }
-    ASSERT_GT(n, 0);
-    EXPECT_NEAR(sum / n, up == 'z' ? 1.0 : 0.5, up == 'z' ? 0.01 : 0.03) << "up " << up;
+  for (Tracer tracer : kTracers) {
+    SCOPED_TRACE(tracer_name(tracer));
+    const std::string env = write_two_tone_env("two_tone", 1.0f, 0.0f);
+    GiSettings s;
+    s.tracer = tracer;
+    s.miss = MissMode::kEnvironment;
+    s.env_map = env;
+    s.rays = 64;
+    s.bounces = 1;
+    const Frame f = load("plane/plane.0001.exr", s);
+    for (char up : {'z', 'y'}) {
+      s.env_up = up;
+      const FrameResult r = run(f, s);
+      double sum = 0;
+      int n = 0;
+      for (int y = 0; y < f.g.height(); ++y)
+        for (int x = 0; x < f.g.width(); ++x)
+          if (f.g.is_surface(x, y)) {
+            sum += r.indirect.at(0, x, y);
+            ++n;
+          }
+      ASSERT_GT(n, 0);
+      EXPECT_NEAR(sum / n, up == 'z' ? 1.0 : 0.5, up == 'z' ? 0.01 : 0.03) << "up " << up;
+    }
+    std::filesystem::remove(env);
   }
-  std::filesystem::remove(env);
 }
 
 }  // namespace

@@ -222,5 +222,32 @@ TEST(Reference, MarchConvergesToTheReference) {
   EXPECT_LT(errors.back(), 0.02);
 }
 
+// The slice tracer on the same surface model: as slices (32 sectors each) and samples per side
+// grow, its error against the reference falls at every step (at trace scale 1, undenoised, one
+// bounce, black misses). Its directions are not the reference's rays, so what remains at the
+// end is the reference's own noise at 1024 rays plus the slices' sampling of the mesh (measured
+// 0.845, 0.246, 0.102, 0.068).
+TEST(Reference, SliceTracerConvergesToTheReference) {
+  const GiSettings ref = reference_settings(1024, {0, 0, 0});
+  const Frame f = load("sample/sample.0001.exr", ref);
+  const Image truth = indirect(f, ref);
+  double mean = 0;
+  for (float v : truth.data()) mean += v;
+  ASSERT_GT(mean, 0);  // the reference itself finds light: a tracer that misses would fail below
+  std::vector<double> errors;
+  for (const auto& [slices, steps] :
+       std::vector<std::pair<int, int>>{{1, 8}, {4, 32}, {16, 64}, {48, 192}}) {
+    GiSettings s = ref;
+    s.tracer = Tracer::kSlices;
+    s.trace_scale = 1;
+    s.slices = slices;
+    s.max_steps = steps;
+    errors.push_back(relative_rmse(indirect(f, s), truth, f.g));
+    std::printf("slices %3d, samples %4d: relRMSE %.4f\n", slices, steps, errors.back());
+  }
+  for (std::size_t i = 1; i < errors.size(); ++i) EXPECT_LT(errors[i], errors[i - 1]) << i;
+  EXPECT_LT(errors.back(), 0.08);
+}
+
 }  // namespace
 }  // namespace ssgi

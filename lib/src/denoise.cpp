@@ -391,30 +391,71 @@ void validate_denoise_settings(const DenoiseSettings& s) {
 
 Image denoise_pyramid(const Image& noisy, const Image& depth, const Image& normal,
                       const DenoiseSettings& settings) {
+  return upsample_and_denoise(noisy, 0, depth, normal, settings, true);
+}
+
+Image upsample_and_denoise(const Image& light, int light_level, const Image& depth,
+                           const Image& normal, const DenoiseSettings& settings, bool denoise) {
   validate_denoise_settings(settings);
-  check_shapes(noisy, depth, normal);
-  if (noisy.width() == 0 || noisy.height() == 0) return Image(noisy.width(), noisy.height(), 3);
+  const int w = depth.width(), h = depth.height();
+  if (w == 0 || h == 0) return Image(w, h, 3);
   const RangeTerms terms = make_range_terms(settings);
 
+  // The guides at every level down to the coarser of the light's and the filter's; the light
+  // enters at its own level and is carried down from there.
   std::vector<Level> levels;
-  levels.push_back(make_level(make_base_level(noisy, depth, normal)));
-  // A 1x1 level cannot shrink further; more levels would repeat it.
-  while (static_cast<int>(levels.size()) <= settings.levels &&
+  const Image none = light_level == 0 ? light : Image(w, h, 3);
+  check_shapes(none, depth, normal);
+  levels.push_back(make_level(make_base_level(none, depth, normal)));
+  auto enter = [&](Level& level) {
+    Image& at = level.radiance;
+    if (light.width() != at.width() || light.height() != at.height() || light.channels() != 3)
+      throw Error(ErrorKind::kInternal, {}, "denoise: light does not match its pyramid level");
+    for (int c = 0; c < 3; ++c)
+      for (std::size_t i = 0; i < at.plane_size(); ++i) {
+        const float v = light.plane(c)[i];
+        at.plane(c)[i] = is_surface(level.guides.plane(kDepth)[i]) && std::isfinite(v) ? v : 0.0f;
+      }
+  };
+  const int deepest = denoise ? std::max(settings.levels, light_level) : light_level;
+  // A 1x1 level cannot shrink further; more levels would repeat it (and the light of a 1x1
+  // grid enters there).
+  bool entered = light_level == 0;
+  while (static_cast<int>(levels.size()) <= deepest &&
          (levels.back().radiance.width() > 1 || levels.back().radiance.height() > 1)) {
     levels.push_back(make_level(downsample_with_guides(levels.back(), terms)));
-  }
-
-  Image light = joint_bilateral(levels.back().radiance, levels.back().guides, settings.radius,
-                                settings.sigma_spatial, terms);
-  for (int l = static_cast<int>(levels.size()) - 2; l >= 0; --l) {
-    light = bilateral_upsample(light, levels[l + 1].guides, levels[l], terms);
-    if (settings.upsample_blur_radius > 0) {
-      // The blur's spatial sigma is its radius: a gentle 3x3 at the default radius 1.
-      light = joint_bilateral(light, levels[l].guides, settings.upsample_blur_radius,
-                              settings.upsample_blur_radius, terms);
+    if (static_cast<int>(levels.size()) - 1 == light_level) {
+      enter(levels.back());
+      entered = true;
     }
   }
-  return light;
+  if (!entered) enter(levels.back());
+  const int coarsest = static_cast<int>(levels.size()) - 1;
+  const int entry = std::min(light_level, coarsest);
+  // Finer than the light's level there is no light of a pixel's own: each takes its block's,
+  // the fallback of bilateral_upsample where no coarse sample resembles it.
+  for (int l = entry - 1; l >= 0; --l) {
+    Level& fine = levels[l];
+    const Image& coarse = levels[l + 1].radiance;
+    for (int y = 0; y < fine.radiance.height(); ++y)
+      for (int x = 0; x < fine.radiance.width(); ++x)
+        for (int c = 0; c < 3; ++c)
+          fine.radiance.at(c, x, y) =
+              is_surface(fine.guides.at(kDepth, x, y)) ? coarse.at(c, x / 2, y / 2) : 0.0f;
+  }
+
+  Image out = denoise ? joint_bilateral(levels.back().radiance, levels.back().guides,
+                                        settings.radius, settings.sigma_spatial, terms)
+                      : levels.back().radiance;
+  for (int l = coarsest - 1; l >= 0; --l) {
+    out = bilateral_upsample(out, levels[l + 1].guides, levels[l], terms);
+    if (denoise && settings.upsample_blur_radius > 0) {
+      // The blur's spatial sigma is its radius: a gentle 3x3 at the default radius 1.
+      out = joint_bilateral(out, levels[l].guides, settings.upsample_blur_radius,
+                            settings.upsample_blur_radius, terms);
+    }
+  }
+  return out;
 }
 
 }  // namespace ssgi::detail

@@ -20,4 +20,11 @@ void validate_denoise_settings(const DenoiseSettings& settings);
 Image denoise_pyramid(const Image& noisy, const Image& depth, const Image& normal,
                       const DenoiseSettings& settings);
 
+// The same pyramid for light traced at a coarser level: `light` is the size of pyramid level
+// `light_level` (the data window halved that many times, rounding up; see gather.h's trace
+// grid), and is carried up to full resolution by joint bilateral upsampling, filtered on the
+// way when `denoise` is set (as denoise_pyramid), else only upsampled.
+Image upsample_and_denoise(const Image& light, int light_level, const Image& depth,
+                           const Image& normal, const DenoiseSettings& settings, bool denoise);
+
 }  // namespace ssgi::detail

@@ -1,6 +1,7 @@
 #include "frame_source.h"
 
 #include <algorithm>
+#include <chrono>
 
 #include "ssgi/error.h"
 #include "ssgi/log.h"
@@ -29,19 +30,40 @@ std::shared_ptr<const GBuffer> geometry_of(const GBuffer& g) {
   return out;
 }
 
+// Adds the wall time of its life, in milliseconds, to *total.
+class StopWatch {
+ public:
+  explicit StopWatch(double* total) : total_(total), start_(std::chrono::steady_clock::now()) {}
+  ~StopWatch() {
+    *total_ += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start_)
+                   .count();
+  }
+
+ private:
+  double* total_;
+  std::chrono::steady_clock::time_point start_;
+};
+
 }  // namespace
 
 FrameSource::FrameSource(const SequenceInfo& sequence, const InputOptions& options,
                          const Pipeline& pipeline)
     : seq_(sequence), options_(options), pipeline_(pipeline) {}
 
+GBuffer FrameSource::read(int frame) const {
+  const StopWatch watch(&read_ms_);
+  return read_gbuffer(seq_, frame, pipeline_.plan().roles, options_);
+}
+
 FrameSource::Lit FrameSource::light(int frame) const {
-  auto g = std::make_shared<GBuffer>(read_gbuffer(seq_, frame, pipeline_.plan().roles, options_));
+  auto g = std::make_shared<GBuffer>(read(frame));
+  const StopWatch watch(&gi_ms_);
   Image indirect = pipeline_.indirect_light(*g);
   return {std::move(g), std::move(indirect)};
 }
 
 FrameSource::Result FrameSource::get(int frame) {
+  read_ms_ = gi_ms_ = 0;
   switch (pipeline_.plan().temporal) {
     case TemporalMode::kWindow:
       return window(frame);
@@ -68,8 +90,7 @@ FrameSource::Result FrameSource::window(int frame) {
     if (it != ring_.end() && f == frame && !it->second.full) {
       // Composited before and trimmed (an output order that comes back to a frame): read its
       // passes again, its light is kept.
-      it->second.g =
-          std::make_shared<GBuffer>(read_gbuffer(seq_, f, pipeline_.plan().roles, options_));
+      it->second.g = std::make_shared<GBuffer>(read(f));
       it->second.full = true;
     }
     if (it == ring_.end()) {
@@ -90,7 +111,11 @@ FrameSource::Result FrameSource::window(int frame) {
     indirect.push_back(&it->second.indirect);
   }
   Lit& own = ring_.at(frame);
-  Result result{own.g, temporal_window(frames, indirect, center, k)};
+  Result result{own.g, {}};
+  {
+    const StopWatch watch(&gi_ms_);
+    result.indirect = temporal_window(frames, indirect, center, k);
+  }
   // From now on the frame is only a neighbour (the caller holds the whole G-buffer for the
   // composite): keep what reprojection reads, so that the ring holds the passes of the frames
   // still to be written only.
@@ -134,6 +159,7 @@ FrameSource::Result FrameSource::ema(int frame) {
 }
 
 void FrameSource::ema_step(int index, Lit lit) {
+  const StopWatch watch(&gi_ms_);
   const bool follows = ema_valid_ && ema_index_ == index - 1;
   ema_out_ = follows ? temporal_ema(*lit.g, lit.indirect, *ema_g_, ema_out_,
                                     pipeline_.settings().ema_alpha)

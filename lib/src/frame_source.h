@@ -26,6 +26,11 @@ class FrameSource {
   };
   Result get(int frame);
 
+  // Milliseconds the last get() spent reading inputs (decoding and converting) and computing
+  // light (trace, bounces, denoise, temporal), over every frame it read for the window.
+  double read_ms() const { return read_ms_; }
+  double gi_ms() const { return gi_ms_; }
+
  private:
   struct Lit {
     std::shared_ptr<const GBuffer> g;
@@ -38,6 +43,9 @@ class FrameSource {
   // One step of the running average over the frame at `index` in frames_on_disk.
   void ema_step(int index, Lit lit);
 
+  GBuffer read(int frame) const;
+
+  mutable double read_ms_ = 0, gi_ms_ = 0;
   const SequenceInfo& seq_;
   const InputOptions& options_;
   const Pipeline& pipeline_;

@@ -59,13 +59,4 @@ struct MissLight {
 // Marches settings.rays rays per surface pixel and records their ends.
 RayHits march_screen_space(const GBuffer& g, const GiSettings& settings, const Environment& env);
 
-// Indirect light per pixel: the mean over its rays of `radiance` at the hit pixel, or the
-// environment for a miss. Background pixels get 0.
-Image gather_indirect(const GBuffer& g, const RayHits& hits, const Image& radiance,
-                      const MissLight& miss);
-
-// march_screen_space followed by gather_indirect, without storing the hits (one bounce).
-Image march_and_gather(const GBuffer& g, const GiSettings& settings, const Environment& env,
-                       const Image& radiance, const MissLight& miss);
-
 }  // namespace ssgi::detail

@@ -36,42 +36,4 @@ double closure_weight(const GBuffer& g, MissMode mode) {
   return surface_fraction * t * t * (3 - 2 * t);
 }
 
-MissLight miss_light(const GBuffer& g, const Image& radiance, double closure) {
-  MissLight miss;
-  miss.env_weight = static_cast<float>(1.0 - closure);
-  if (closure <= 0) return miss;
-  const int w = g.width(), h = g.height();
-  // Sums in double, in a fixed order: the same bits for any thread count.
-  double sum[3] = {0, 0, 0};
-  std::size_t surfaces = 0;
-  for (int y = 0; y < h; ++y) {
-    for (int x = 0; x < w; ++x) {
-      if (!g.is_surface(x, y)) continue;
-      ++surfaces;
-      for (int c = 0; c < 3; ++c) sum[c] += radiance.at(c, x, y);
-    }
-  }
-  for (int c = 0; c < 3; ++c)
-    miss.frame_radiance[c] = surfaces ? static_cast<float>(closure * sum[c] / surfaces) : 0.0f;
-  return miss;
-}
-
-Image gather_bounces(const GBuffer& g, const RayHits& hits, const Image& reflected, int bounces,
-                     double closure) {
-  Image indirect = gather_indirect(g, hits, reflected, miss_light(g, reflected, closure));
-  for (int b = 1; b < bounces; ++b) {
-    Image radiance = reflected;
-    for (int c = 0; c < 3; ++c) {
-      float* r = radiance.plane(c);
-      const float* a = g.albedo.plane(c);
-      const float* ind = indirect.plane(c);
-      // Albedo above 1 would add energy at every bounce.
-      for (std::size_t p = 0; p < radiance.plane_size(); ++p)
-        r[p] += std::clamp(a[p], 0.0f, 1.0f) * ind[p];
-    }
-    indirect = gather_indirect(g, hits, radiance, miss_light(g, radiance, closure));
-  }
-  return indirect;
-}
-
 }  // namespace ssgi::detail

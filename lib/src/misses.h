@@ -20,13 +20,4 @@ double enclosure(const GBuffer& g);
 // abruptly between frames.
 double closure_weight(const GBuffer& g, MissMode mode);
 
-// What misses bring when gathering `radiance`: the environment weighted by 1 - closure, plus
-// closure x the mean light the frame's surfaces reflect.
-MissLight miss_light(const GBuffer& g, const Image& radiance, double closure);
-
-// Indirect light after `bounces` gathers over the same rays: the light a surface reflects after
-// bounce b is its own `reflected` light plus albedo x indirect of bounce b.
-Image gather_bounces(const GBuffer& g, const RayHits& hits, const Image& reflected, int bounces,
-                     double closure);
-
 }  // namespace ssgi::detail

@@ -9,9 +9,11 @@
 #include "composite.h"
 #include "denoise.h"
 #include "environment.h"
+#include "gather.h"
 #include "march.h"
 #include "misses.h"
 #include "reference.h"
+#include "slices.h"
 #include "ssgi/error.h"
 
 namespace ssgi {
@@ -27,6 +29,11 @@ void validate(const GiSettings& s) {
   if (s.rays < 1 || s.rays > 4096) throw_usage("--rays must be between 1 and 4096");
   if (s.max_steps < 1 || s.max_steps > 1 << 20)
     throw_usage("--max-steps must be between 1 and 1048576");
+  if (s.slices < 1 || s.slices > 256) throw_usage("--slices must be between 1 and 256");
+  if (s.trace_scale != 1 && s.trace_scale != 2 && s.trace_scale != 4)
+    throw_usage("--trace-scale must be 1, 2 or 4");
+  if (s.tracer == Tracer::kSlices && s.miss == MissMode::kExtend)
+    throw_usage("--miss extend needs the march (--tracer march)");
   // Beyond 1e30 a distance no longer fits the march's float arithmetic; 0 means unlimited.
   if (!(s.max_distance >= 0) || !(s.max_distance <= 1e30))
     throw_usage("--max-distance must be between 0 (unlimited) and 1e30");
@@ -114,17 +121,30 @@ Plan make_plan(const SequenceInfo& seq, const GiSettings& s) {
       break;
   }
   plan.reasons.push_back(misses);
-  const bool reference = s.tracer == Tracer::kReference;
-  plan.cache_hits = s.bounces > 1 || reference;
-  const std::string bounces = std::to_string(s.bounces) + " bounce" +
-                              (s.bounces > 1 ? "s (hits kept and re-gathered for each further "
-                                               "bounce)"
-                                             : "");
-  plan.reasons.push_back(
-      reference ? "trace: Embree against the depth mesh, " + std::to_string(s.rays) +
-                      " rays per pixel, " + bounces
-                : "march: " + std::to_string(s.rays) + " rays per pixel, exact walk up to " +
-                      std::to_string(s.max_steps) + " pixels, sampled beyond, " + bounces);
+  plan.trace_scale = s.tracer == Tracer::kSlices ? s.trace_scale : 1;
+  const std::string bounces =
+      std::to_string(s.bounces) + " bounce" +
+      (s.bounces > 1 ? "s (hits kept and re-gathered for each further bounce)" : "");
+  switch (s.tracer) {
+    case Tracer::kReference:
+      plan.reasons.push_back("trace: Embree against the depth mesh, " + std::to_string(s.rays) +
+                             " rays per pixel, " + bounces);
+      break;
+    case Tracer::kScreenSpace:
+      plan.reasons.push_back("trace: march, " + std::to_string(s.rays) +
+                             " rays per pixel, exact walk up to " + std::to_string(s.max_steps) +
+                             " pixels, sampled beyond, " + bounces);
+      break;
+    case Tracer::kSlices:
+      plan.reasons.push_back(
+          "trace: slices (visibility bitmask), " + std::to_string(s.slices) + " slices of 32 " +
+          "sectors and " + std::to_string(s.max_steps) + " samples a side from " +
+          (plan.trace_scale == 1 ? std::string("every pixel")
+                                 : "one pixel in " + std::to_string(plan.trace_scale) + "x" +
+                                       std::to_string(plan.trace_scale)) +
+          ", " + bounces);
+      break;
+  }
   plan.denoise = s.denoise == DenoiseMode::kPyramid;
   plan.reasons.push_back(plan.denoise ? "denoise: bilateral pyramid" : "denoise: none");
   plan.temporal = s.temporal;
@@ -177,20 +197,26 @@ Image Pipeline::indirect_light(const GBuffer& g) const {
   const Plan& plan = impl_->plan;
   const Image reflected = detail::reflected_radiance(g, plan.gather_emission);
   const double closure = detail::closure_weight(g, s.miss);
-  Image indirect;
-  if (s.tracer == Tracer::kReference) {
-    const detail::RayHits hits = detail::trace_reference(g, s, impl_->env);
-    indirect = detail::gather_bounces(g, hits, reflected, s.bounces, closure);
-  } else if (!plan.cache_hits) {
-    indirect = detail::march_and_gather(g, s, impl_->env, reflected,
-                                        detail::miss_light(g, reflected, closure));
-  } else {
-    const detail::RayHits hits = detail::march_screen_space(g, s, impl_->env);
-    indirect = detail::gather_bounces(g, hits, reflected, s.bounces, closure);
+  const detail::TraceGrid grid = detail::make_trace_grid(g, plan.trace_scale);
+  detail::WeightedHits hits;
+  switch (s.tracer) {
+    case Tracer::kReference:
+      hits = detail::weighted_from_rays(grid, detail::trace_reference(g, s, impl_->env));
+      break;
+    case Tracer::kScreenSpace:
+      hits = detail::weighted_from_rays(grid, detail::march_screen_space(g, s, impl_->env));
+      break;
+    case Tracer::kSlices:
+      hits = detail::trace_slices(g, grid, s, impl_->env);
+      break;
   }
-  if (plan.denoise)
-    indirect = detail::denoise_pyramid(indirect, g.depth, g.normal, s.denoise_settings);
-  return indirect;
+  const Image traced = detail::gather_bounces(g, grid, hits, reflected, s.bounces, closure);
+  hits = {};
+  int level = 0;
+  for (int k = plan.trace_scale; k > 1; k /= 2) ++level;
+  if (level == 0 && !plan.denoise) return traced;
+  return detail::upsample_and_denoise(traced, level, g.depth, g.normal, s.denoise_settings,
+                                      plan.denoise);
 }
 
 FrameResult Pipeline::composite(const GBuffer& g, Image indirect) const {

@@ -86,14 +86,22 @@ RunReport run_sequence(const RunOptions& options, const FrameCallback& on_frame)
     fr.output = out.path_for(fr.frame);
     try {
       detail::FrameSource::Result lit = source.get(fr.frame);
+      fr.read_ms = source.read_ms();
+      fr.gi_ms = source.gi_ms();
       const GBuffer& g = *lit.g;
+      const auto composite_start = std::chrono::steady_clock::now();
       FrameResult result = pipeline.composite(g, std::move(lit.indirect));
+      const auto write_start = std::chrono::steady_clock::now();
+      fr.gi_ms += std::chrono::duration<double, std::milli>(write_start - composite_start).count();
       write_frame(fr.output, g,
                   {{"", &result.composite, {"R", "G", "B", "A"}},
                    {"indirect", &result.indirect, {"R", "G", "B"}},
                    {"gi", &result.gi, {"R", "G", "B"}}},
                   write);
       write.warn_collisions = false;  // one warning per run is enough
+      fr.write_ms =
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - write_start)
+              .count();
       fr.ok = true;
     } catch (const Error& e) {
       fr.error_kind = e.kind();

@@ -17,7 +17,7 @@ namespace ssgi {
 struct Plan {
   RoleMask roles = 0;            // the channels the reader reads
   bool gather_emission = false;  // emission is part of the light rays pick up
-  bool cache_hits = false;       // several bounces re-gather the first bounce's hits
+  int trace_scale = 1;           // data-window pixels per trace sample, each axis
   bool env_map = false;          // misses look up an environment map
   bool denoise = false;
   TemporalMode temporal = TemporalMode::kNone;

@@ -26,6 +26,10 @@ struct FrameReport {
   ErrorKind error_kind = ErrorKind::kInternal;  // when !ok
   std::string error_file, error;                // when !ok
   double seconds = 0;                           // read + process + write
+  // Milliseconds: decoding and converting inputs (the frame's and its window's new
+  // neighbours'), everything between those and the frame ready to encode (tracing, bounces,
+  // denoise, temporal, composite), and encoding and writing.
+  double read_ms = 0, gi_ms = 0, write_ms = 0;
 };
 
 struct RunReport {

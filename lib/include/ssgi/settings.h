@@ -4,6 +4,8 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace ssgi {
 
@@ -45,15 +47,20 @@ struct DenoiseSettings {
   int upsample_blur_radius = 1;
 };
 
-// Who traces the hemisphere rays: the screen-space march (ssgi run) or Embree against the
-// depth buffer's mesh (ssgi reference).
-enum class Tracer { kScreenSpace, kReference };
+// Who traces the hemisphere: the slice tracer (a visibility bitmask over screen-space slices,
+// the fast default), the exact screen-space march of single rays, or Embree against the depth
+// buffer's mesh (ssgi reference). All three follow the same surface model and miss rules.
+enum class Tracer { kSlices, kScreenSpace, kReference };
 
 // Everything that decides the GI result of a frame.
 struct GiSettings {
-  Tracer tracer = Tracer::kScreenSpace;
-  int rays = 8;        // hemisphere rays per pixel and bounce
-  int max_steps = 64;  // march samples per ray at most
+  Tracer tracer = Tracer::kSlices;
+  int rays = 8;        // march and reference: hemisphere rays per pixel and bounce
+  int slices = 2;      // slice tracer: slices per trace sample (32 rays each)
+  int max_steps = 24;  // samples per ray (march) or per side of a slice at most
+  // Data-window pixels per trace sample along each axis (1, 2 or 4): the slice tracer traces
+  // from one pixel of each block, and the denoiser's pyramid takes the light from there.
+  int trace_scale = 2;
   // Longest ray, in camera-space scene units; 0: until the ray leaves the screen.
   double max_distance = 0;
   // Surface model (lib/src/surface_model.h): a depth pixel is a slab from its depth z to
@@ -77,5 +84,17 @@ struct GiSettings {
   float ema_alpha = 0.1f;   // EMA: weight of the current frame
   std::uint32_t seed = 0;
 };
+
+// The presets (--preset): `draft` for look development, `default` (what GiSettings{} holds),
+// `final` for delivery. Sets the tracing settings of `name` on *settings, leaving the others.
+// Throws Error(kUsage) for an unknown name. man/ssgi.1 lists what each sets.
+void apply_preset(const std::string& name, GiSettings* settings);
+
+// The names of the presets, in order of cost.
+const std::vector<std::string>& preset_names();
+
+// Every setting that decides the result, as (name, value) pairs named as the options are,
+// for `ssgi info`, --stats and the output's provenance.
+std::vector<std::pair<std::string, std::string>> describe_settings(const GiSettings& settings);
 
 }  // namespace ssgi

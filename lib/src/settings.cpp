@@ -1,0 +1,107 @@
+// Presets and the settings as text.
+#include "ssgi/settings.h"
+
+#include <sstream>
+
+#include "ssgi/error.h"
+
+namespace ssgi {
+namespace {
+
+// A preset is a row: the tracing settings it sets, nothing else.
+struct PresetRow {
+  const char* name;
+  int slices, max_steps, trace_scale, bounces;
+};
+
+// Measured on the sample scenes and the 1080p benchmark (README, "Speed").
+constexpr PresetRow kPresets[] = {
+    {"draft", 1, 16, 4, 4},
+    {"default", 2, 24, 2, 8},
+    {"final", 6, 32, 1, 8},
+};
+
+const char* tracer_name(Tracer t) {
+  switch (t) {
+    case Tracer::kSlices:
+      return "slices";
+    case Tracer::kScreenSpace:
+      return "march";
+    case Tracer::kReference:
+      return "reference";
+  }
+  return "?";
+}
+
+const char* miss_name(MissMode m) {
+  switch (m) {
+    case MissMode::kEnvironment:
+      return "env";
+    case MissMode::kFrame:
+      return "frame";
+    case MissMode::kExtend:
+      return "extend";
+    case MissMode::kAuto:
+      return "auto";
+  }
+  return "?";
+}
+
+template <typename T>
+std::string text(const T& v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+}  // namespace
+
+void apply_preset(const std::string& name, GiSettings* s) {
+  for (const PresetRow& row : kPresets) {
+    if (name != row.name) continue;
+    s->tracer = Tracer::kSlices;
+    s->slices = row.slices;
+    s->max_steps = row.max_steps;
+    s->trace_scale = row.trace_scale;
+    s->bounces = row.bounces;
+    return;
+  }
+  throw_usage("unknown --preset '" + name + "' (draft, default, final)");
+}
+
+const std::vector<std::string>& preset_names() {
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> n;
+    for (const PresetRow& row : kPresets) n.push_back(row.name);
+    return n;
+  }();
+  return names;
+}
+
+std::vector<std::pair<std::string, std::string>> describe_settings(const GiSettings& s) {
+  std::vector<std::pair<std::string, std::string>> out = {{"tracer", tracer_name(s.tracer)}};
+  if (s.tracer == Tracer::kSlices) {
+    out.emplace_back("slices", text(s.slices));
+    out.emplace_back("max-steps", text(s.max_steps));
+    out.emplace_back("trace-scale", text(s.trace_scale));
+  } else {
+    out.emplace_back("rays", text(s.rays));
+    if (s.tracer == Tracer::kScreenSpace) out.emplace_back("max-steps", text(s.max_steps));
+  }
+  out.emplace_back("bounces", text(s.bounces));
+  out.emplace_back("thickness", text(s.thickness));
+  out.emplace_back("max-distance", text(s.max_distance));
+  out.emplace_back("miss", miss_name(s.miss));
+  out.emplace_back("env", s.env_map.empty() ? text(s.env_color[0]) + "," + text(s.env_color[1]) +
+                                                  "," + text(s.env_color[2])
+                                            : s.env_map);
+  out.emplace_back("denoise", s.denoise == DenoiseMode::kPyramid ? "pyramid" : "none");
+  out.emplace_back("temporal", s.temporal == TemporalMode::kNone ? std::string("none")
+                               : s.temporal == TemporalMode::kEma
+                                   ? "ema:" + text(s.ema_alpha)
+                                   : "window:" + text(s.temporal_radius));
+  out.emplace_back("seed", text(s.seed));
+  return out;
+}
+
+}  // namespace ssgi

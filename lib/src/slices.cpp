@@ -1,0 +1,403 @@
+#include "slices.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "directions.h"
+#include "march.h"
+#include "parallel.h"
+#include "surface_model.h"
+
+namespace ssgi::detail {
+namespace {
+
+constexpr int kSectors = 32;
+constexpr float kPi = 3.14159265358979f;
+
+struct V3 {
+  float x, y, z;
+};
+V3 operator+(V3 a, V3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+V3 operator-(V3 a, V3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+V3 operator*(float s, V3 a) { return {s * a.x, s * a.y, s * a.z}; }
+float dot(V3 a, V3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+V3 cross(V3 a, V3 b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+V3 normalized(V3 a) { return (1.0f / std::sqrt(dot(a, a))) * a; }
+
+// atan2 to about 1e-5 rad with a polynomial (no libm call in the inner loop; the same bits on
+// every platform).
+float fast_atan2(float y, float x) {
+  const float ax = std::fabs(x), ay = std::fabs(y);
+  const float hi = std::max(ax, ay), lo = std::min(ax, ay);
+  if (hi == 0) return 0.0f;
+  const float a = lo / hi, s = a * a;
+  // Minimax polynomial for atan on [0, 1].
+  float r =
+      ((((((-0.0040540580f * s + 0.0218612288f) * s - 0.0559098861f) * s + 0.0964200441f) * s -
+         0.1390853351f) *
+            s +
+        0.1994653599f) *
+           s -
+       0.3332985605f) *
+          s * a +
+      a;
+  if (ay > ax) r = 0.5f * kPi - r;
+  if (x < 0) r = kPi - r;
+  return y < 0 ? -r : r;
+}
+
+// An angle in the slice, from the view vector towards T, with its sine and cosine.
+struct Angle {
+  float theta, s, c;
+};
+
+Angle angle_of(V3 w, V3 view, V3 t) {
+  const float c = dot(w, view), s = dot(w, t);
+  const float inv = 1.0f / std::sqrt(c * c + s * s);
+  return {fast_atan2(s, c), s * inv, c * inv};
+}
+
+// The slice's measure cos(theta - gamma) |sin theta| integrated from 0 to theta, as a function
+// that increases over the hemisphere [gamma - pi/2, gamma + pi/2].
+struct SliceMeasure {
+  float cg, sg;
+  float operator()(const Angle& a) const {
+    const float g = 0.5f * (cg * a.s * a.s + sg * (a.theta - a.s * a.c));
+    return a.s < 0 ? -g : g;
+  }
+};
+
+// A slice at azimuth psi around the view vector weighs W(psi) = cos(beta) + gamma sin(beta)
+// cos(alpha)... in full: n.V + gamma (n.T), gamma = atan2(n.T, n.V), with alpha = psi minus the
+// azimuth of the normal and beta the normal's angle from the view vector; W has mean 1 over
+// psi. Slices are drawn with density W / pi through this table of its inverse distribution
+// (per beta, alpha at evenly spaced probabilities), so that every slice weighs about the same.
+class SliceAzimuths {
+ public:
+  static constexpr int kBetas = 65, kProbabilities = 65;
+
+  SliceAzimuths() {
+    constexpr int kSteps = 4096;
+    std::vector<double> cdf(kSteps + 1);
+    for (int j = 0; j < kBetas; ++j) {
+      const double beta = 0.5 * M_PI * j / (kBetas - 1);
+      cdf[0] = 0;
+      for (int i = 0; i < kSteps; ++i) {
+        const double alpha = M_PI * (i + 0.5) / kSteps;
+        cdf[i + 1] = cdf[i] + weight(std::cos(beta), std::sin(beta) * std::cos(alpha));
+      }
+      for (double& c : cdf) c /= cdf[kSteps];
+      for (int k = 0; k < kProbabilities; ++k) {
+        const double xi = static_cast<double>(k) / (kProbabilities - 1);
+        const int i = static_cast<int>(std::lower_bound(cdf.begin(), cdf.end(), xi) - cdf.begin());
+        double alpha = M_PI;
+        if (i == 0) {
+          alpha = 0;
+        } else if (i <= kSteps) {
+          const double f = (xi - cdf[i - 1]) / std::max(cdf[i] - cdf[i - 1], 1e-300);
+          alpha = M_PI * (i - 1 + f) / kSteps;
+        }
+        table_[j][k] = static_cast<float>(alpha);
+      }
+    }
+  }
+
+  // W for n.V = nv and n.T = nt.
+  static double weight(double nv, double nt) { return nv + std::atan2(nt, nv) * nt; }
+
+  // The alpha of probability xi in [0, 1] for a normal at cos(beta) = nv, and d alpha / d xi
+  // there (1 / the density the draw has).
+  float alpha(float nv, float xi, float* dalpha_dxi) const {
+    const float beta = std::acos(std::clamp(nv, 0.0f, 1.0f));
+    const float fb = beta / (0.5f * kPi) * (kBetas - 1);
+    const int j = std::min(static_cast<int>(fb), kBetas - 2);
+    const float wb = fb - static_cast<float>(j);
+    const float fx = std::clamp(xi, 0.0f, 1.0f) * (kProbabilities - 1);
+    const int k = std::min(static_cast<int>(fx), kProbabilities - 2);
+    const float wx = fx - static_cast<float>(k);
+    const float a0 = table_[j][k] + wb * (table_[j + 1][k] - table_[j][k]);
+    const float a1 = table_[j][k + 1] + wb * (table_[j + 1][k + 1] - table_[j][k + 1]);
+    *dalpha_dxi = (a1 - a0) * (kProbabilities - 1);
+    return a0 + wx * (a1 - a0);
+  }
+
+ private:
+  float table_[kBetas][kProbabilities];
+};
+
+const SliceAzimuths& slice_azimuths() {
+  static const SliceAzimuths table;
+  return table;
+}
+
+struct SliceTracer {
+  const GBuffer& g;
+  const TraceGrid& grid;
+  const GiSettings& settings;
+  const Environment& env;
+  SurfaceModel model;
+  DepthMesh mesh;
+  int w, h;
+  float fx, fy, cx, cy;  // camera in data-window pixels
+  double cam_to_world[3][3];
+
+  SliceTracer(const GBuffer& gb, const TraceGrid& gr, const GiSettings& s, const Environment& e)
+      : g(gb),
+        grid(gr),
+        settings(s),
+        env(e),
+        model{static_cast<float>(s.thickness)},
+        mesh(gb.depth, model),
+        w(gb.width()),
+        h(gb.height()) {
+    const Camera& cam = gb.camera;
+    fx = static_cast<float>(cam.fx);
+    fy = static_cast<float>(cam.fy);
+    cx = static_cast<float>(cam.cx - (gb.data_window.x0 - gb.display_window.x0));
+    cy = static_cast<float>(cam.cy - (gb.data_window.y0 - gb.display_window.y0));
+    const Mat4d inv = cam.has_world_transform ? cam.world_to_camera.inverse() : Mat4d();
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) cam_to_world[i][j] = inv.m[i][j];
+  }
+
+  // The camera-space direction through data-window pixel coordinates (sx, sy), at z = 1.
+  V3 ray(float sx, float sy) const { return {(sx - cx) / fx, (cy - sy) / fy, 1.0f}; }
+
+  std::array<float, 3> env_radiance(V3 d) const {
+    if (env.is_constant()) return env.radiance({d.x, d.y, d.z});
+    const auto& m = cam_to_world;  // row-vector: world = d * M
+    return env.radiance({static_cast<float>(d.x * m[0][0] + d.y * m[1][0] + d.z * m[2][0]),
+                         static_cast<float>(d.x * m[0][1] + d.y * m[1][1] + d.z * m[2][1]),
+                         static_cast<float>(d.x * m[0][2] + d.y * m[1][2] + d.z * m[2][2])});
+  }
+
+  // Traces the slices of trace sample `s` from pixel `p`; appends its hits.
+  void trace(int p, std::vector<std::int32_t>* pixels, std::vector<float>* weights, float* miss,
+             float env_light[3]) const {
+    const int x = p % w, y = p / w;
+    const float z0 = g.depth.plane(0)[p];
+    const V3 n{g.normal.plane(0)[p], g.normal.plane(1)[p], g.normal.plane(2)[p]};
+    const float offset = static_cast<float>(settings.start_offset) * z0;
+    const V3 origin = z0 * ray(x + 0.5f, y + 0.5f) + offset * n;
+    const V3 view = normalized(-1.0f * origin);
+    // Azimuths around the view vector are measured from the normal's own (basis_x), so that
+    // the slices can be drawn with the density of their weight (SliceAzimuths).
+    const float nv_pixel = std::clamp(dot(n, view), 0.0f, 1.0f);
+    V3 across = n - nv_pixel * view;
+    if (!(dot(across, across) > 1e-12f)) across = V3{1, 0, 0} - view.x * view;
+    const V3 basis_x = normalized(across);
+    const V3 basis_y = cross(view, basis_x);
+    const SliceAzimuths& azimuths = slice_azimuths();
+    // Where the origin is on the screen: every sample lies on a line through it.
+    const float qx = cx + fx * origin.x / origin.z, qy = cy - fy * origin.y / origin.z;
+    const int display_x = x + g.data_window.x0 - g.display_window.x0;
+    const int display_y = y + g.data_window.y0 - g.display_window.y0;
+    const PixelNoise noise = pixel_noise(display_x, display_y, g.frame, settings.seed);
+    const int slices = settings.slices, steps = settings.max_steps;
+    const float max_distance = static_cast<float>(settings.max_distance);
+    const std::uint32_t all = ~0u;
+    const std::size_t first_entry = weights->size();
+    float total_weight = 0;  // the slices' weights, whose mean is 1 over all slice angles
+
+    for (int i = 0; i < slices; ++i) {
+      float u_phi, u_rot, u_step;
+      ray_sample(noise, i, &u_phi, &u_rot, &u_step);
+      // The slice's azimuth around the view vector, stratified over [0, pi): uniform in this
+      // angle (not in the screen's) is what the measure asks for under perspective.
+      // Stratified in probability; alpha in [0, pi) gives every slice plane once.
+      float dalpha_dxi;
+      const float xi = (static_cast<float>(i) + u_phi) / static_cast<float>(slices);
+      const float psi = azimuths.alpha(nv_pixel, xi, &dalpha_dxi);
+      const V3 t = std::cos(psi) * basis_x + std::sin(psi) * basis_y;
+      const V3 plane_normal = cross(view, t);
+      // The slice's screen line: where the projection of origin + e t moves as e grows.
+      float dx = fx * (t.x * origin.z - origin.x * t.z);
+      float dy = -fy * (t.y * origin.z - origin.y * t.z);
+      const float screen_length = std::sqrt(dx * dx + dy * dy);
+      if (!(screen_length > 0)) continue;
+      dx /= screen_length;
+      dy /= screen_length;
+      // The normal in the slice: its angle gamma from the view vector and its length.
+      const V3 np = n - dot(n, plane_normal) * plane_normal;
+      const float nv = std::max(dot(np, view), 1e-6f), nt = dot(np, t);
+      const float np_length = std::sqrt(nv * nv + nt * nt);
+      if (!(np_length > 0)) continue;
+      const float cg = nv / np_length, sg = nt / np_length;
+      const float gamma = fast_atan2(sg, cg);
+      const SliceMeasure measure{cg, sg};
+      const Angle lowest{gamma - 0.5f * kPi, -cg, sg}, highest{gamma + 0.5f * kPi, cg, -sg};
+      const float h_lo = measure(lowest), h_total = measure(highest) - h_lo;
+      if (!(h_total > 0)) continue;
+      // Each sector's share of the pixel's hemisphere: the slice's weight over the sectors.
+      // The slice's weight over the density it was drawn with: W / (W_table / pi) ~ 1.
+      const float sector_weight = np_length * h_total * dalpha_dxi /
+                                  (kPi * static_cast<float>(kSectors) * static_cast<float>(slices));
+      const float to_sector = static_cast<float>(kSectors) / h_total;
+      total_weight += sector_weight * static_cast<float>(kSectors);
+      auto sectors = [&](Angle a, Angle b) -> std::uint32_t {
+        if (a.theta > b.theta) std::swap(a, b);
+        if (a.theta < lowest.theta) a = lowest;
+        if (b.theta > highest.theta) b = highest;
+        if (!(b.theta > a.theta)) return 0;
+        // Sector k is the ray at measure (k + u_rot) / kSectors of the slice.
+        const float fa = (measure(a) - h_lo) * to_sector - u_rot;
+        const float fb = (measure(b) - h_lo) * to_sector - u_rot;
+        const int k0 = std::max(0, static_cast<int>(std::ceil(fa)));
+        const int k1 = std::min(kSectors - 1, static_cast<int>(std::floor(fb)));
+        if (k1 < k0) return 0;
+        const std::uint32_t upto = k1 == 31 ? all : (1u << (k1 + 1)) - 1;
+        return upto & ~((1u << k0) - 1);
+      };
+
+      std::uint32_t mask = 0;
+      for (int side = 0; side < 2 && mask != all; ++side) {
+        const float sx = side ? -dx : dx, sy = side ? -dy : dy;
+        // Distance to the data window's border along the side.
+        float t_max = std::numeric_limits<float>::infinity();
+        if (sx > 0) t_max = std::min(t_max, (static_cast<float>(w) - qx) / sx);
+        if (sx < 0) t_max = std::min(t_max, -qx / sx);
+        if (sy > 0) t_max = std::min(t_max, (static_cast<float>(h) - qy) / sy);
+        if (sy < 0) t_max = std::min(t_max, -qy / sy);
+        t_max *= 0.99999f;
+        if (!(t_max > 1.0f)) continue;
+        bool prev_valid = false;
+        float prev_z = 0;
+        Angle prev_a{}, prev_b{};
+        V3 prev_n{0, 0, 0}, prev_front{0, 0, 0};
+        for (int j = 0; j < steps && mask != all; ++j) {
+          const float f = (static_cast<float>(j) + u_step) / static_cast<float>(steps);
+          // Quadratic spacing: dense near the origin (contact), sparse far away.
+          const float dist = 1.0f + (t_max - 1.0f) * f * f;
+          MeshPoint surface;
+          const float px = qx + sx * dist, py = qy + sy * dist;
+          if (!mesh.surface_at(px, py, &surface)) {
+            prev_valid = false;
+            continue;
+          }
+          const V3 front = surface.z * ray(px, py);
+          if (max_distance > 0 && dot(front - origin, front - origin) > max_distance * max_distance)
+            break;
+          const V3 back = (1.0f + model.thickness) * front;
+          const Angle a = angle_of(front - origin, view, t), b = angle_of(back - origin, view, t);
+          std::uint32_t bits = sectors(a, b);
+          // Between two samples of one continuous surface, the strip joining their slabs.
+          const V3 sn{g.normal.plane(0)[surface.pixel], g.normal.plane(1)[surface.pixel],
+                      g.normal.plane(2)[surface.pixel]};
+          // Samples far apart on one plane (a floor seen at a grazing angle) differ in depth by
+          // more than a slab but are one surface: the mesh joins every pixel between them.
+          const bool coplanar = prev_valid && dot(sn, prev_n) > 0.9f &&
+                                std::fabs(dot(prev_n, front - prev_front)) <=
+                                    model.thickness * std::min(prev_z, surface.z);
+          if (prev_valid && (coplanar || model.connected(prev_z, surface.z))) {
+            Angle lo = a.theta < b.theta ? a : b, hi = a.theta < b.theta ? b : a;
+            for (const Angle& q : {prev_a, prev_b}) {
+              if (q.theta < lo.theta) lo = q;
+              if (q.theta > hi.theta) hi = q;
+            }
+            bits |= sectors(lo, hi);
+          }
+          const std::uint32_t fresh = bits & ~mask;
+          if (fresh) {
+            pixels->push_back(surface.pixel);
+            weights->push_back(sector_weight * static_cast<float>(__builtin_popcount(fresh)));
+            mask |= fresh;
+          }
+          prev_valid = true;
+          prev_z = surface.z;
+          prev_n = sn;
+          prev_front = front;
+          prev_a = a;
+          prev_b = b;
+        }
+      }
+      const std::uint32_t missed = ~mask;
+      *miss += sector_weight * static_cast<float>(__builtin_popcount(missed));
+      if (!env.is_black() && missed) {
+        for (int k = 0; k < kSectors; ++k) {
+          if (!(missed >> k & 1u)) continue;
+          // The sector's ray: the angle where the measure reaches (k + u_rot) / kSectors.
+          const float target = h_lo + (static_cast<float>(k) + u_rot) / to_sector;
+          float lo = lowest.theta, hi = highest.theta;
+          for (int it = 0; it < 24; ++it) {
+            const float mid = 0.5f * (lo + hi);
+            const Angle m{mid, std::sin(mid), std::cos(mid)};
+            (measure(m) < target ? lo : hi) = mid;
+          }
+          const float th = 0.5f * (lo + hi);
+          const V3 d = std::cos(th) * view + std::sin(th) * t;
+          const std::array<float, 3> l = env_radiance(d);
+          for (int c = 0; c < 3; ++c) env_light[c] += sector_weight * l[c];
+        }
+      }
+    }
+    // Each slice's weight |n_p| x its measure has mean 1 over the slice angles; dividing by the
+    // sampled slices' own total makes a pixel's weights sum to 1 exactly (a ratio estimator:
+    // the furnace stays exact, and the weights' variance is gone), at the same limit.
+    if (!(total_weight > 0)) {
+      *miss = 1.0f;
+      return;
+    }
+    const float norm = 1.0f / total_weight;
+    for (std::size_t e = first_entry; e < weights->size(); ++e) (*weights)[e] *= norm;
+    *miss *= norm;
+    for (int c = 0; c < 3; ++c) env_light[c] *= norm;
+  }
+};
+
+}  // namespace
+
+WeightedHits trace_slices(const GBuffer& g, const TraceGrid& grid, const GiSettings& settings,
+                          const Environment& env) {
+  const SliceTracer tracer(g, grid, settings, env);
+  WeightedHits hits;
+  hits.miss = Image(grid.width, grid.height, 1);
+  hits.env = Image(grid.width, grid.height, 3);
+  // Each row collects its hits apart; joined in row order, so the result is the same for any
+  // thread count.
+  std::vector<std::vector<std::int32_t>> row_pixels(grid.height);
+  std::vector<std::vector<float>> row_weights(grid.height);
+  std::vector<std::vector<std::uint32_t>> row_counts(grid.height);
+  parallel_for_rows(grid.height, [&](int by) {
+    std::vector<std::int32_t>& px = row_pixels[by];
+    std::vector<float>& wt = row_weights[by];
+    std::vector<std::uint32_t>& counts = row_counts[by];
+    counts.assign(grid.width, 0);
+    for (int bx = 0; bx < grid.width; ++bx) {
+      const int s = by * grid.width + bx;
+      const int p = grid.origin[s];
+      if (p < 0) continue;
+      const std::size_t before = px.size();
+      float miss = 0, env_light[3] = {0, 0, 0};
+      tracer.trace(p, &px, &wt, &miss, env_light);
+      counts[bx] = static_cast<std::uint32_t>(px.size() - before);
+      hits.miss.plane(0)[s] = miss;
+      for (int c = 0; c < 3; ++c) hits.env.plane(c)[s] = env_light[c];
+    }
+  });
+  std::size_t total = 0;
+  for (const auto& r : row_pixels) total += r.size();
+  hits.pixel.reserve(total);
+  hits.weight.reserve(total);
+  hits.begin.resize(grid.origin.size() + 1);
+  std::uint32_t at = 0;
+  for (int by = 0; by < grid.height; ++by) {
+    for (int bx = 0; bx < grid.width; ++bx) {
+      hits.begin[static_cast<std::size_t>(by) * grid.width + bx] = at;
+      at += row_counts[by][bx];
+    }
+    hits.pixel.insert(hits.pixel.end(), row_pixels[by].begin(), row_pixels[by].end());
+    hits.weight.insert(hits.weight.end(), row_weights[by].begin(), row_weights[by].end());
+    row_pixels[by] = {};
+    row_weights[by] = {};
+  }
+  hits.begin.back() = at;
+  return hits;
+}
+
+}  // namespace ssgi::detail
