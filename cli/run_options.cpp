@@ -178,8 +178,9 @@ const char* common_options_help() {
          "                        ssgi, PRESETS); options given override it\n"
          "  --tracer T            slices (default) or march\n"
          "  --slices N            slices per traced pixel, 32 directions each (default 2)\n"
-         "  --trace-scale N       trace one pixel in NxN: 1, 2 (default) or 4\n"
-         "  --max-steps N         samples per slice side or per march ray (default 24)\n"
+         "  --trace-scale N       trace one pixel in NxN: 1, 2, 4, 8 or auto (default: the\n"
+         "                        preset's trace grid width, 480 across)\n"
+         "  --max-steps N         samples per slice side or per march ray (default 28)\n"
          "  --rays N              march: rays per pixel and bounce (default 8)\n"
          "  --max-distance D      longest ray in scene units, 0 = unlimited (default 0)\n"
          "  --thickness T         a depth pixel is a slab from z to z*(1+T) (default 0.1)\n"
@@ -286,7 +287,8 @@ CommonOptions parse_common_options(int argc, char** argv, bool need_output) {
         gi.slices = static_cast<int>(parse_long("slices", a, 1, 256));
         break;
       case kTraceScale:
-        gi.trace_scale = static_cast<int>(parse_long("trace-scale", a, 1, 4));
+        gi.trace_scale =
+            std::string(a) == "auto" ? 0 : static_cast<int>(parse_long("trace-scale", a, 1, 8));
         break;
       case kMaxSteps:
         gi.max_steps = static_cast<int>(parse_long("max-steps", a, 1, 1 << 20));

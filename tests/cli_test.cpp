@@ -1036,16 +1036,16 @@ TEST_F(Cli, PresetsSetTheirSettingsAndGivenOptionsOverrideThem) {
   const nlohmann::json plain = settings_of({});
   EXPECT_EQ(plain["preset"], "default");
   EXPECT_EQ(plain["settings"]["slices"], "2");
-  EXPECT_EQ(plain["settings"]["trace-scale"], "2");
+  EXPECT_EQ(plain["settings"]["trace-scale"], "auto (480 across)");
   const nlohmann::json draft = settings_of({"--preset", "draft"});
   EXPECT_EQ(draft["settings"]["slices"], "1");
-  EXPECT_EQ(draft["settings"]["trace-scale"], "4");
+  EXPECT_EQ(draft["settings"]["trace-scale"], "auto (240 across)");
   EXPECT_EQ(draft["settings"]["bounces"], "4");
   const nlohmann::json fin = settings_of({"--slices", "3", "--preset=final"});
   EXPECT_EQ(fin["preset"], "final");
   EXPECT_EQ(fin["settings"]["slices"], "3");  // given, so not the preset's 6
-  EXPECT_EQ(fin["settings"]["trace-scale"], "1");
-  EXPECT_EQ(fin["settings"]["max-steps"], "32");
+  EXPECT_EQ(fin["settings"]["trace-scale"], "auto (960 across)");
+  EXPECT_EQ(fin["settings"]["max-steps"], "28");
   expect_usage_error(run_ssgi({"info", in, "--preset", "best"}), "info",
                      "unknown --preset 'best' (draft, default, final)");
 }

@@ -10,18 +10,29 @@
 
 namespace ssgi::detail {
 
-TraceGrid make_trace_grid(const GBuffer& g, int scale) {
+TraceGrid make_trace_grid(const GBuffer& g, const Image& reflected, int scale, float thickness) {
   TraceGrid grid;
   const int w = g.width(), h = g.height();
   grid.scale = scale;
   grid.width = (w + scale - 1) / scale;
   grid.height = (h + scale - 1) / scale;
-  grid.full_width = w;
-  grid.origin.assign(static_cast<std::size_t>(grid.width) * grid.height, -1);
+  const Camera& cam = g.camera;
+  const float inv_scale = 1.0f / static_cast<float>(scale);
+  grid.fx = static_cast<float>(cam.fx) * inv_scale;
+  grid.fy = static_cast<float>(cam.fy) * inv_scale;
+  grid.cx = static_cast<float>(cam.cx - (g.data_window.x0 - g.display_window.x0)) * inv_scale;
+  grid.cy = static_cast<float>(cam.cy - (g.data_window.y0 - g.display_window.y0)) * inv_scale;
+  const std::size_t n = static_cast<std::size_t>(grid.width) * grid.height;
+  grid.origin.assign(n, -1);
+  grid.depth = Image(grid.width, grid.height, 1, std::numeric_limits<float>::infinity());
+  grid.normal = Image(grid.width, grid.height, 3);
+  grid.reflected = Image(grid.width, grid.height, 3);
+  grid.albedo = Image(grid.width, grid.height, 3);
   const float* depth = g.depth.plane(0);
   parallel_for_rows(grid.height, [&](int by) {
     std::vector<float> depths;
     for (int bx = 0; bx < grid.width; ++bx) {
+      const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
       depths.clear();
       const int x0 = bx * scale, y0 = by * scale;
       const int x1 = std::min(x0 + scale, w), y1 = std::min(y0 + scale, h);
@@ -33,9 +44,8 @@ TraceGrid make_trace_grid(const GBuffer& g, int scale) {
       if (depths.empty()) continue;
       // The pixel nearest the median depth; on a tie the nearer one, then the first in
       // scanline order.
-      std::vector<float> sorted = depths;
-      std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-      const float median = sorted[sorted.size() / 2];
+      std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
+      const float median = depths[depths.size() / 2];
       int best = -1;
       float best_d = std::numeric_limits<float>::infinity(), best_z = 0;
       for (int y = y0; y < y1; ++y)
@@ -50,7 +60,48 @@ TraceGrid make_trace_grid(const GBuffer& g, int scale) {
             best_z = z;
           }
         }
-      grid.origin[static_cast<std::size_t>(by) * grid.width + bx] = best;
+      grid.origin[s] = best;
+      const float n[3] = {g.normal.plane(0)[best], g.normal.plane(1)[best],
+                          g.normal.plane(2)[best]};
+      for (int c = 0; c < 3; ++c) grid.normal.plane(c)[s] = n[c];
+      if (scale == 1) {
+        grid.depth.plane(0)[s] = best_z;
+        for (int c = 0; c < 3; ++c) {
+          grid.reflected.plane(c)[s] = reflected.plane(c)[best];
+          grid.albedo.plane(c)[s] = std::clamp(g.albedo.plane(c)[best], 0.0f, 1.0f);
+        }
+        continue;
+      }
+      // The origin's plane at the block's centre: a plane stays a plane on the grid.
+      auto ray = [&](float sx, float sy) {
+        return std::array<float, 3>{(sx * inv_scale - grid.cx) / grid.fx,
+                                    (grid.cy - sy * inv_scale) / grid.fy, 1.0f};
+      };
+      const std::array<float, 3> ro = ray(best % w + 0.5f, best / w + 0.5f);
+      const std::array<float, 3> rc =
+          ray(static_cast<float>(x0) + 0.5f * scale, static_cast<float>(y0) + 0.5f * scale);
+      const float num = best_z * (n[0] * ro[0] + n[1] * ro[1] + n[2] * ro[2]);
+      const float den = n[0] * rc[0] + n[1] * rc[1] + n[2] * rc[2];
+      const float zc = num / den;
+      grid.depth.plane(0)[s] = den != 0 && zc > 0.5f * best_z && zc < 2.0f * best_z ? zc : best_z;
+      // The block's light: its pixels on the origin's surface, averaged.
+      float sum[6] = {0, 0, 0, 0, 0, 0};
+      int count = 0;
+      for (int y = y0; y < y1; ++y)
+        for (int x = x0; x < x1; ++x) {
+          const int p = y * w + x;
+          const float z = depth[p];
+          if (!(std::fabs(z - best_z) <= thickness * best_z)) continue;
+          for (int c = 0; c < 3; ++c) {
+            sum[c] += reflected.plane(c)[p];
+            sum[3 + c] += std::clamp(g.albedo.plane(c)[p], 0.0f, 1.0f);
+          }
+          ++count;
+        }
+      for (int c = 0; c < 3; ++c) {
+        grid.reflected.plane(c)[s] = sum[c] / static_cast<float>(count);
+        grid.albedo.plane(c)[s] = sum[3 + c] / static_cast<float>(count);
+      }
     }
   });
   return grid;
@@ -115,9 +166,9 @@ MissLight miss_light_over_grid(const TraceGrid& grid, const Radiance& radiance, 
   // Sums in double, in a fixed order: the same bits for any thread count.
   double sum[3] = {0, 0, 0};
   std::size_t n = 0;
-  for (const std::int32_t p : grid.origin) {
-    if (p < 0) continue;
-    const std::array<float, 3> l = radiance(p);
+  for (std::size_t s = 0; s < grid.origin.size(); ++s) {
+    if (grid.origin[s] < 0) continue;
+    const std::array<float, 3> l = radiance(static_cast<int>(s));
     for (int c = 0; c < 3; ++c) sum[c] += l[c];
     ++n;
   }
@@ -128,24 +179,27 @@ MissLight miss_light_over_grid(const TraceGrid& grid, const Radiance& radiance, 
 
 }  // namespace
 
-Image gather_bounces(const GBuffer& g, const TraceGrid& grid, const WeightedHits& hits,
-                     const Image& reflected, int bounces, double closure) {
-  const float* rr = reflected.plane(0);
-  const float* rg = reflected.plane(1);
-  const float* rb = reflected.plane(2);
-  auto first = [&](int p) { return std::array<float, 3>{rr[p], rg[p], rb[p]}; };
-  Image indirect = gather_once(grid, hits, first, miss_light_over_grid(grid, first, closure));
+Image gather_bounces(const TraceGrid& grid, const WeightedHits& hits, int bounces, double closure) {
+  // Each bounce's light per trace sample, packed RGB_ so that a hit is one 16-byte load.
+  const std::size_t n = grid.origin.size();
+  std::vector<std::array<float, 4>> light(n);
+  for (std::size_t s = 0; s < n; ++s)
+    light[s] = {grid.reflected.plane(0)[s], grid.reflected.plane(1)[s], grid.reflected.plane(2)[s],
+                0.0f};
+  auto lookup = [&](int s) {
+    const std::array<float, 4>& l = light[s];
+    return std::array<float, 3>{l[0], l[1], l[2]};
+  };
+  Image indirect = gather_once(grid, hits, lookup, miss_light_over_grid(grid, lookup, closure));
   for (int b = 1; b < bounces; ++b) {
-    const Image previous = std::move(indirect);
-    // Albedo above 1 would add energy at every bounce.
-    auto lit = [&](int p) {
-      const std::size_t s = static_cast<std::size_t>(grid.block_of(p));
-      std::array<float, 3> l = first(p);
-      for (int c = 0; c < 3; ++c)
-        l[c] += std::clamp(g.albedo.plane(c)[p], 0.0f, 1.0f) * previous.plane(c)[s];
-      return l;
-    };
-    indirect = gather_once(grid, hits, lit, miss_light_over_grid(grid, lit, closure));
+    parallel_for_rows(grid.height, [&](int by) {
+      for (int bx = 0; bx < grid.width; ++bx) {
+        const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
+        for (int c = 0; c < 3; ++c)
+          light[s][c] = grid.reflected.plane(c)[s] + grid.albedo.plane(c)[s] * indirect.plane(c)[s];
+      }
+    });
+    indirect = gather_once(grid, hits, lookup, miss_light_over_grid(grid, lookup, closure));
   }
   return indirect;
 }

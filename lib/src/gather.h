@@ -5,7 +5,8 @@
 // block of the data window traces from one pixel of its own (the one nearest the block's
 // median depth, the surface most of the block shows), so that the tracer runs at the
 // resolution the denoiser filters at, and the denoiser's pyramid takes the result from there.
-// Hits always name full-resolution pixels, whose own light they bring.
+// Hits name trace samples, whose light they bring: the tracers run at the trace grid's size
+// (its few megabytes stay in cache), not at the frame's.
 #pragma once
 
 #include <cstdint>
@@ -13,30 +14,33 @@
 
 #include "march.h"
 #include "ssgi/gbuffer.h"
+#include "ssgi/image.h"
 
 namespace ssgi::detail {
 
 struct TraceGrid {
   int scale = 1;              // 1, 2 or 4: data-window pixels per trace sample, each axis
   int width = 0, height = 0;  // trace samples across and down
-  int full_width = 0;         // the data window's width
   // Per trace sample: the full-resolution pixel index it traces from, or -1 (no surface).
   std::vector<std::int32_t> origin;
-
-  // The trace sample whose block holds full-resolution pixel `pixel`.
-  int block_of(int pixel) const {
-    const int x = pixel % full_width, y = pixel / full_width;
-    return (y / scale) * width + x / scale;
-  }
+  // What rays meet, per trace sample: the surface at the block's centre (the plane of its
+  // origin pixel there; +inf where there is none), that pixel's normal, and the mean
+  // reflected light and albedo (clamped to [0, 1]) of the block's pixels on its surface. At
+  // scale 1 these are the frame's own values, so the mesh is the frame's (surface_model.h).
+  Image depth, normal, reflected, albedo;
+  // The camera in trace-sample units: the data window's pixel coordinates divided by scale.
+  float fx = 1, fy = 1, cx = 0, cy = 0;
 };
 
-// The grid of trace origins for `g` at `scale`.
-TraceGrid make_trace_grid(const GBuffer& g, int scale);
+// The grid of trace origins for `g` at `scale`, with what rays meet there; `reflected` is the
+// light the frame's surfaces reflect (composite.h); a block's pixels within `thickness` x depth
+// of its origin's are on its surface.
+TraceGrid make_trace_grid(const GBuffer& g, const Image& reflected, int scale, float thickness);
 
 // Weighted hits of every trace sample.
 struct WeightedHits {
   std::vector<std::uint32_t> begin;  // per trace sample, first entry; one more at the end
-  std::vector<std::int32_t> pixel;   // full-resolution pixel whose light the entry brings
+  std::vector<std::int32_t> pixel;   // trace sample whose light the entry brings
   std::vector<float> weight;         // its share of the cosine-weighted hemisphere
   Image miss;                        // 1 channel: the share that met nothing
   Image env;                         // 3 channels: environment light of those directions
@@ -47,10 +51,9 @@ struct WeightedHits {
 WeightedHits weighted_from_rays(const TraceGrid& grid, const RayHits& rays);
 
 // Indirect light at the trace grid after `bounces` gathers over `hits`: a hit brings its
-// pixel's `reflected` light plus, from the second bounce on, albedo x the indirect light its
-// block gathered in the bounce before; the missed share brings the miss model's light
-// (misses.h, with `closure` from closure_weight). 0 where the grid has no origin.
-Image gather_bounces(const GBuffer& g, const TraceGrid& grid, const WeightedHits& hits,
-                     const Image& reflected, int bounces, double closure);
+// sample's reflected light plus, from the second bounce on, its albedo x the indirect light it
+// gathered in the bounce before; the missed share brings the miss model's light (misses.h,
+// with `closure` from closure_weight). 0 where the grid has no origin.
+Image gather_bounces(const TraceGrid& grid, const WeightedHits& hits, int bounces, double closure);
 
 }  // namespace ssgi::detail

@@ -30,8 +30,10 @@ void validate(const GiSettings& s) {
   if (s.max_steps < 1 || s.max_steps > 1 << 20)
     throw_usage("--max-steps must be between 1 and 1048576");
   if (s.slices < 1 || s.slices > 256) throw_usage("--slices must be between 1 and 256");
-  if (s.trace_scale != 1 && s.trace_scale != 2 && s.trace_scale != 4)
-    throw_usage("--trace-scale must be 1, 2 or 4");
+  if (s.trace_scale != 0 && s.trace_scale != 1 && s.trace_scale != 2 && s.trace_scale != 4 &&
+      s.trace_scale != 8)
+    throw_usage("--trace-scale must be auto, 1, 2, 4 or 8");
+  if (s.trace_width < 1) throw_usage("the trace width must be at least 1");
   if (s.tracer == Tracer::kSlices && s.miss == MissMode::kExtend)
     throw_usage("--miss extend needs the march (--tracer march)");
   // Beyond 1e30 a distance no longer fits the march's float arithmetic; 0 means unlimited.
@@ -121,7 +123,16 @@ Plan make_plan(const SequenceInfo& seq, const GiSettings& s) {
       break;
   }
   plan.reasons.push_back(misses);
-  plan.trace_scale = s.tracer == Tracer::kSlices ? s.trace_scale : 1;
+  plan.trace_scale = 1;
+  if (s.tracer == Tracer::kSlices) {
+    plan.trace_scale = s.trace_scale;
+    if (plan.trace_scale == 0) {
+      plan.trace_scale = 1;
+      while (plan.trace_scale < 8 &&
+             seq.data_window.width() / (2 * plan.trace_scale) >= s.trace_width)
+        plan.trace_scale *= 2;
+    }
+  }
   const std::string bounces =
       std::to_string(s.bounces) + " bounce" +
       (s.bounces > 1 ? "s (hits kept and re-gathered for each further bounce)" : "");
@@ -197,7 +208,8 @@ Image Pipeline::indirect_light(const GBuffer& g) const {
   const Plan& plan = impl_->plan;
   const Image reflected = detail::reflected_radiance(g, plan.gather_emission);
   const double closure = detail::closure_weight(g, s.miss);
-  const detail::TraceGrid grid = detail::make_trace_grid(g, plan.trace_scale);
+  const detail::TraceGrid grid =
+      detail::make_trace_grid(g, reflected, plan.trace_scale, static_cast<float>(s.thickness));
   detail::WeightedHits hits;
   switch (s.tracer) {
     case Tracer::kReference:
@@ -210,7 +222,7 @@ Image Pipeline::indirect_light(const GBuffer& g) const {
       hits = detail::trace_slices(g, grid, s, impl_->env);
       break;
   }
-  const Image traced = detail::gather_bounces(g, grid, hits, reflected, s.bounces, closure);
+  const Image traced = detail::gather_bounces(grid, hits, s.bounces, closure);
   hits = {};
   int level = 0;
   for (int k = plan.trace_scale; k > 1; k /= 2) ++level;

@@ -136,15 +136,80 @@ const SliceAzimuths& slice_azimuths() {
   return table;
 }
 
+// The trace grid's mesh (surface_model.h's rules) packed for the march along slices: a
+// sample reads the three corners of one triangle, two neighbouring rows, so each vertex is one
+// 8-byte texel holding its inverse depth, its normal to 1/127 and the flags of the quad's two
+// triangles. Samples land far apart; fewer cache lines per sample is what makes them fast.
+class PackedMesh {
+ public:
+  PackedMesh(const Image& depth, const Image& normal, const SurfaceModel& model)
+      : width_(depth.width()), height_(depth.height()), texels_(depth.plane_size()) {
+    const DepthMesh mesh(depth, model);
+    for (int j = 0; j < height_; ++j)
+      for (int i = 0; i < width_; ++i) {
+        const std::size_t p = static_cast<std::size_t>(j) * width_ + i;
+        Texel& t = texels_[p];
+        t.inverse_depth = 1.0f / depth.plane(0)[p];
+        auto q = [](float v) {
+          return static_cast<std::int8_t>(std::lround(std::clamp(v, -1.0f, 1.0f) * 127.0f));
+        };
+        t.nx = q(normal.plane(0)[p]);
+        t.ny = q(normal.plane(1)[p]);
+        t.nz = q(normal.plane(2)[p]);
+        t.triangles = static_cast<std::uint8_t>((mesh.has_triangle(i, j, true) ? kUpper : 0) |
+                                                (mesh.has_triangle(i, j, false) ? kLower : 0));
+      }
+  }
+
+  struct Hit {
+    float z;
+    int pixel;  // the vertex whose light it brings (DepthMesh::heaviest_vertex's rule)
+    V3 normal;  // that vertex's, to 1/127
+  };
+
+  // DepthMesh::surface_at on the packed texels.
+  bool surface_at(float sx, float sy, Hit* out) const {
+    const float u = sx - 0.5f, v = sy - 0.5f;
+    const float fi = std::floor(u), fj = std::floor(v);
+    const int i = static_cast<int>(fi), j = static_cast<int>(fj);
+    if (i < 0 || j < 0 || i + 1 >= width_ || j + 1 >= height_) return false;
+    const float fu = u - fi, fv = v - fj;
+    const bool upper = fu >= fv;
+    const int a = j * width_ + i;
+    if (!(texels_[a].triangles & (upper ? kUpper : kLower))) return false;
+    const int b = upper ? a + 1 : a + width_, c = a + width_ + 1;
+    const float wa = upper ? 1.0f - fu : 1.0f - fv;
+    const float wb = upper ? fu - fv : fv - fu;
+    const float wc = upper ? fv : fu;
+    out->z = 1.0f / (wa * texels_[a].inverse_depth + wb * texels_[b].inverse_depth +
+                     wc * texels_[c].inverse_depth);
+    out->pixel = wa >= wb && wa >= wc ? a : wb >= wc ? b : c;
+    const Texel& t = texels_[out->pixel];
+    constexpr float k = 1.0f / 127.0f;
+    out->normal = {k * t.nx, k * t.ny, k * t.nz};
+    return true;
+  }
+
+ private:
+  static constexpr std::uint8_t kUpper = 1, kLower = 2;
+  struct Texel {
+    float inverse_depth;
+    std::int8_t nx, ny, nz;
+    std::uint8_t triangles;
+  };
+  int width_, height_;
+  std::vector<Texel> texels_;
+};
+
 struct SliceTracer {
   const GBuffer& g;
   const TraceGrid& grid;
   const GiSettings& settings;
   const Environment& env;
   SurfaceModel model;
-  DepthMesh mesh;
-  int w, h;
-  float fx, fy, cx, cy;  // camera in data-window pixels
+  PackedMesh mesh;
+  int w, h;              // the frame's data window
+  float fx, fy, cx, cy;  // the camera in trace-grid units
   double cam_to_world[3][3];
 
   SliceTracer(const GBuffer& gb, const TraceGrid& gr, const GiSettings& s, const Environment& e)
@@ -153,20 +218,20 @@ struct SliceTracer {
         settings(s),
         env(e),
         model{static_cast<float>(s.thickness)},
-        mesh(gb.depth, model),
+        mesh(gr.depth, gr.normal, model),
         w(gb.width()),
-        h(gb.height()) {
+        h(gb.height()),
+        fx(gr.fx),
+        fy(gr.fy),
+        cx(gr.cx),
+        cy(gr.cy) {
     const Camera& cam = gb.camera;
-    fx = static_cast<float>(cam.fx);
-    fy = static_cast<float>(cam.fy);
-    cx = static_cast<float>(cam.cx - (gb.data_window.x0 - gb.display_window.x0));
-    cy = static_cast<float>(cam.cy - (gb.data_window.y0 - gb.display_window.y0));
     const Mat4d inv = cam.has_world_transform ? cam.world_to_camera.inverse() : Mat4d();
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) cam_to_world[i][j] = inv.m[i][j];
   }
 
-  // The camera-space direction through data-window pixel coordinates (sx, sy), at z = 1.
+  // The camera-space direction through trace-grid coordinates (sx, sy), at z = 1.
   V3 ray(float sx, float sy) const { return {(sx - cx) / fx, (cy - sy) / fy, 1.0f}; }
 
   std::array<float, 3> env_radiance(V3 d) const {
@@ -184,7 +249,8 @@ struct SliceTracer {
     const float z0 = g.depth.plane(0)[p];
     const V3 n{g.normal.plane(0)[p], g.normal.plane(1)[p], g.normal.plane(2)[p]};
     const float offset = static_cast<float>(settings.start_offset) * z0;
-    const V3 origin = z0 * ray(x + 0.5f, y + 0.5f) + offset * n;
+    const float to_grid = 1.0f / static_cast<float>(grid.scale);
+    const V3 origin = z0 * ray((x + 0.5f) * to_grid, (y + 0.5f) * to_grid) + offset * n;
     const V3 view = normalized(-1.0f * origin);
     // Azimuths around the view vector are measured from the normal's own (basis_x), so that
     // the slices can be drawn with the density of their weight (SliceAzimuths).
@@ -260,9 +326,9 @@ struct SliceTracer {
         const float sx = side ? -dx : dx, sy = side ? -dy : dy;
         // Distance to the data window's border along the side.
         float t_max = std::numeric_limits<float>::infinity();
-        if (sx > 0) t_max = std::min(t_max, (static_cast<float>(w) - qx) / sx);
+        if (sx > 0) t_max = std::min(t_max, (static_cast<float>(w) * to_grid - qx) / sx);
         if (sx < 0) t_max = std::min(t_max, -qx / sx);
-        if (sy > 0) t_max = std::min(t_max, (static_cast<float>(h) - qy) / sy);
+        if (sy > 0) t_max = std::min(t_max, (static_cast<float>(h) * to_grid - qy) / sy);
         if (sy < 0) t_max = std::min(t_max, -qy / sy);
         t_max *= 0.99999f;
         if (!(t_max > 1.0f)) continue;
@@ -270,11 +336,14 @@ struct SliceTracer {
         float prev_z = 0;
         Angle prev_a{}, prev_b{};
         V3 prev_n{0, 0, 0}, prev_front{0, 0, 0};
-        for (int j = 0; j < steps && mask != all; ++j) {
+        // Quadratic spacing: dense near the origin (contact), sparse far away.
+        auto distance_of = [&](int j) {
           const float f = (static_cast<float>(j) + u_step) / static_cast<float>(steps);
-          // Quadratic spacing: dense near the origin (contact), sparse far away.
-          const float dist = 1.0f + (t_max - 1.0f) * f * f;
-          MeshPoint surface;
+          return 1.0f + (t_max - 1.0f) * f * f;
+        };
+        for (int j = 0; j < steps && mask != all; ++j) {
+          const float dist = distance_of(j);
+          PackedMesh::Hit surface;
           const float px = qx + sx * dist, py = qy + sy * dist;
           if (!mesh.surface_at(px, py, &surface)) {
             prev_valid = false;
@@ -287,8 +356,7 @@ struct SliceTracer {
           const Angle a = angle_of(front - origin, view, t), b = angle_of(back - origin, view, t);
           std::uint32_t bits = sectors(a, b);
           // Between two samples of one continuous surface, the strip joining their slabs.
-          const V3 sn{g.normal.plane(0)[surface.pixel], g.normal.plane(1)[surface.pixel],
-                      g.normal.plane(2)[surface.pixel]};
+          const V3 sn = surface.normal;
           // Samples far apart on one plane (a floor seen at a grazing angle) differ in depth by
           // more than a slab but are one surface: the mesh joins every pixel between them.
           const bool coplanar = prev_valid && dot(sn, prev_n) > 0.9f &&

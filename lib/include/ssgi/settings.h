@@ -57,10 +57,13 @@ struct GiSettings {
   Tracer tracer = Tracer::kSlices;
   int rays = 8;        // march and reference: hemisphere rays per pixel and bounce
   int slices = 2;      // slice tracer: slices per trace sample (32 rays each)
-  int max_steps = 24;  // samples per ray (march) or per side of a slice at most
-  // Data-window pixels per trace sample along each axis (1, 2 or 4): the slice tracer traces
-  // from one pixel of each block, and the denoiser's pyramid takes the light from there.
-  int trace_scale = 2;
+  int max_steps = 28;  // samples per ray (march) or per side of a slice at most
+  // Data-window pixels per trace sample along each axis (1, 2, 4 or 8): the slice tracer
+  // traces from one pixel of each block, and the denoiser's pyramid takes the light from
+  // there. 0: the largest scale whose grid is still trace_width samples across (or scale 1),
+  // so that a preset costs and looks the same at any resolution.
+  int trace_scale = 0;
+  int trace_width = 480;
   // Longest ray, in camera-space scene units; 0: until the ray leaves the screen.
   double max_distance = 0;
   // Surface model (lib/src/surface_model.h): a depth pixel is a slab from its depth z to

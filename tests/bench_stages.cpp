@@ -1,0 +1,127 @@
+// Google Benchmark of one frame's GI stages at the resolution of the frame given in
+// SSGI_BENCH_FRAME (default: the 1080p room that tests/bench/make_1080p.sh writes to
+// /tmp/ssgi1080/room.0001.exr): read, trace grid, slice tracing, bounces, denoise, composite,
+// and the whole indirect light. Not a test: build/bin/bench_stages [--benchmark_repetitions=5]
+#include <benchmark/benchmark.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+#include "composite.h"
+#include "denoise.h"
+#include "environment.h"
+#include "gather.h"
+#include "misses.h"
+#include "slices.h"
+#include "ssgi/io.h"
+#include "ssgi/pipeline.h"
+
+namespace {
+
+std::string frame_path() {
+  const char* env = std::getenv("SSGI_BENCH_FRAME");
+  return env ? env : "/tmp/ssgi1080/room.0001.exr";
+}
+
+struct Loaded {
+  ssgi::InputOptions in;
+  ssgi::SequenceInfo seq;
+  ssgi::GBuffer g;
+  ssgi::GiSettings s;
+  ssgi::Image reflected;
+  ssgi::detail::TraceGrid grid;
+  ssgi::detail::WeightedHits hits;
+  ssgi::Image traced;
+  int scale = 1, level = 0;  // the plan's trace scale and its pyramid level
+};
+
+Loaded& frame() {
+  static Loaded l = [] {
+    Loaded l;
+    l.in.pattern = frame_path();
+    l.seq = ssgi::open_sequence(l.in);
+    l.g = ssgi::read_gbuffer(l.seq, l.seq.frames.front(), ssgi::make_plan(l.seq, l.s).roles, l.in);
+    l.reflected = ssgi::detail::reflected_radiance(l.g, false);
+    l.scale = ssgi::make_plan(l.seq, l.s).trace_scale;
+    for (int k = l.scale; k > 1; k /= 2) ++l.level;
+    l.grid = ssgi::detail::make_trace_grid(l.g, l.reflected, l.scale, 0.1f);
+    l.hits = ssgi::detail::trace_slices(l.g, l.grid, l.s, ssgi::detail::Environment());
+    l.traced = ssgi::detail::gather_bounces(l.grid, l.hits, l.s.bounces, 0.5);
+    return l;
+  }();
+  return l;
+}
+
+void BM_Read(benchmark::State& state) {
+  Loaded& l = frame();
+  const ssgi::RoleMask roles = ssgi::make_plan(l.seq, l.s).roles;
+  for (auto _ : state)
+    benchmark::DoNotOptimize(ssgi::read_gbuffer(l.seq, l.seq.frames.front(), roles, l.in));
+}
+void BM_ReflectedAndClosure(benchmark::State& state) {
+  Loaded& l = frame();
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(ssgi::detail::reflected_radiance(l.g, false));
+    benchmark::DoNotOptimize(ssgi::detail::closure_weight(l.g, ssgi::MissMode::kAuto));
+  }
+}
+void BM_TraceGrid(benchmark::State& state) {
+  Loaded& l = frame();
+  for (auto _ : state)
+    benchmark::DoNotOptimize(ssgi::detail::make_trace_grid(l.g, l.reflected, l.scale, 0.1f));
+}
+void BM_TraceSlices(benchmark::State& state) {
+  Loaded& l = frame();
+  const ssgi::detail::Environment env;
+  for (auto _ : state) benchmark::DoNotOptimize(ssgi::detail::trace_slices(l.g, l.grid, l.s, env));
+  state.counters["hits/sample"] = static_cast<double>(l.hits.entries()) / l.grid.origin.size();
+}
+void BM_Bounces(benchmark::State& state) {
+  Loaded& l = frame();
+  for (auto _ : state)
+    benchmark::DoNotOptimize(ssgi::detail::gather_bounces(l.grid, l.hits, l.s.bounces, 0.5));
+}
+void BM_Denoise(benchmark::State& state) {
+  Loaded& l = frame();
+  for (auto _ : state)
+    benchmark::DoNotOptimize(ssgi::detail::upsample_and_denoise(
+        l.traced, l.level, l.g.depth, l.g.normal, l.s.denoise_settings, true));
+}
+void BM_IndirectLight(benchmark::State& state) {
+  Loaded& l = frame();
+  const ssgi::Pipeline pipeline(l.seq, l.s);
+  for (auto _ : state) benchmark::DoNotOptimize(pipeline.indirect_light(l.g));
+}
+
+}  // namespace
+
+BENCHMARK(BM_Read)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ReflectedAndClosure)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_TraceGrid)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_TraceSlices)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Bounces)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Denoise)->Unit(benchmark::kMillisecond);
+void BM_Composite(benchmark::State& state) {
+  Loaded& l = frame();
+  const ssgi::Pipeline pipeline(l.seq, l.s);
+  const ssgi::Image indirect = pipeline.indirect_light(l.g);
+  for (auto _ : state) benchmark::DoNotOptimize(pipeline.composite(l.g, indirect));
+}
+
+BENCHMARK(BM_IndirectLight)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Composite)->Unit(benchmark::kMillisecond);
+
+int main(int argc, char** argv) {
+  if (!std::filesystem::exists(frame_path())) {
+    std::fprintf(stderr,
+                 "bench_stages: no %s (make it with tests/bench/make_1080p.sh, or set "
+                 "SSGI_BENCH_FRAME)\n",
+                 frame_path().c_str());
+    return 1;
+  }
+  benchmark::Initialize(&argc, argv);
+  benchmark::RunSpecifiedBenchmarks();
+  return 0;
+}
