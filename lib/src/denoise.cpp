@@ -11,6 +11,8 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 #include <string>
 #include <vector>
@@ -24,7 +26,6 @@ namespace {
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
 // The guide channels of a pyramid level.
-enum GuideChannel { kDepth, kNormalX, kNormalY, kNormalZ, kGradientX, kGradientY, kGuideCount };
 
 // Beyond this exponent a weight is below 2e-22, far under the float resolution of any sum it
 // would join, so it is taken as 0 without calling exp.
@@ -36,67 +37,88 @@ constexpr double kMaxExponent = 50.0;
 // from switching abruptly; where the coarse samples do match, it lets in 1e-3 of the noise.
 constexpr double kOwnValueWeight = 1e-3;
 
+// One pixel's guides: depth (+inf on background), unit normal (0 where unknown), and the
+// depth change per pixel along x and y on the pixel's own surface (see `axis_gradient`).
+// Stored together (24 bytes a pixel): a filter tap reads one pixel's guides at once.
+struct Surface {
+  float z = kInf, nx = 0, ny = 0, nz = 0, gx = 0, gy = 0;
+};
+
+struct Guides {
+  int width = 0, height = 0;
+  std::vector<Surface> px;
+  Guides() = default;
+  Guides(int w, int h) : width(w), height(h), px(static_cast<std::size_t>(w) * h) {}
+};
+
 struct Level {
   Image radiance;  // 3 channels, 0 on background
-  // kGuideCount channels: depth (+inf on background), unit normal (0 where unknown), and the
-  // depth change per pixel along x and y on the pixel's own surface (see `axis_gradient`).
-  Image guides;
+  Guides guides;
 };
-
-// One pixel's guides, in double so that no depth in float range overflows in the depth test.
-struct Surface {
-  double z, nx, ny, nz, gx, gy;
-};
-
-Surface load_surface(const Image& guides, std::size_t i) {
-  return {guides.plane(kDepth)[i],   guides.plane(kNormalX)[i],   guides.plane(kNormalY)[i],
-          guides.plane(kNormalZ)[i], guides.plane(kGradientX)[i], guides.plane(kGradientY)[i]};
-}
 
 bool is_surface(float z) { return z < kInf; }
 bool has_normal(const Surface& s) { return s.nx != 0 || s.ny != 0 || s.nz != 0; }
 
 struct RangeTerms {
-  double inv_sigma_depth;  // 1 / relative depth difference at which the weight is exp(-1/2)
-  double normal_power;
+  float inv_sigma_depth;  // 1 / relative depth difference at which the weight is exp(-1/2)
+  float normal_power;
   int integer_normal_power;  // normal_power when it is a whole number up to 64, else -1
 };
 
 RangeTerms make_range_terms(const DenoiseSettings& s) {
-  const double p = s.normal_power;
+  const float p = s.normal_power;
   const bool whole = p == std::floor(p) && p <= 64;
-  return {1.0 / s.sigma_depth, p, whole ? static_cast<int>(p) : -1};
+  return {1.0f / s.sigma_depth, p, whole ? static_cast<int>(p) : -1};
 }
 
 // x^p for x in [0, 1]. Whole powers (the default 32 among them) by repeated squaring, which
 // is several times faster than std::pow in the innermost loop.
-double normal_term(double x, const RangeTerms& terms) {
+float normal_term(float x, const RangeTerms& terms) {
   int n = terms.integer_normal_power;
   if (n < 0) return std::pow(x, terms.normal_power);
-  double result = 1;
+  float result = 1;
   for (; n > 0; n >>= 1, x *= x) {
     if (n & 1) result *= x;
   }
   return result;
 }
 
+// exp(-e) for e in [0, kMaxExponent), to about 2e-7 relative: 2^-e log2(e) split into an
+// exponent and a polynomial for 2^f on [0, 1). No libm call in the innermost loop, and the same
+// bits on every platform.
+inline __attribute__((always_inline)) float exp_negative(float e) {
+  const float t = -e * 1.44269504f;
+  const float whole = std::floor(t);
+  const float f = t - whole;
+  const float p =
+      1.0f +
+      f * (0.6931472f +
+           f * (0.2402265f +
+                f * (0.05550357f + f * (0.009618129f + f * (0.001333355f + f * 0.0001540353f)))));
+  const std::int32_t bits = (static_cast<std::int32_t>(whole) + 127) << 23;
+  float scale;
+  std::memcpy(&scale, &bits, sizeof scale);
+  return p * scale;
+}
+
 // How much sample q belongs to p's surface: 1 for p itself, ~0 across an edge or a crease.
 // (dx, dy) is q's position relative to p, in p's pixels.
-double range_weight(const Surface& p, const Surface& q, double dx, double dy,
-                    const RangeTerms& terms) {
+inline __attribute__((always_inline)) float range_weight(const Surface& p, const Surface& q,
+                                                         float dx, float dy,
+                                                         const RangeTerms& terms) {
   // q's depth against p's extrapolated along p's screen-space depth gradient, so that a slanted
   // plane passes as one surface; relative to p's depth, so that the test does not depend on
-  // the scene's scale.
-  const double dz = (q.z - p.z) - p.gx * dx - p.gy * dy;
-  const double s = dz * terms.inv_sigma_depth / p.z;
-  const double exponent = 0.5 * s * s;
-  if (!(exponent < kMaxExponent)) return 0.0;  // also rejects NaN
-  double w = std::exp(-exponent);
-  const double cos_angle = p.nx * q.nx + p.ny * q.ny + p.nz * q.nz;
+  // the scene's scale. An overflow gives inf or NaN, which the test below rejects.
+  const float dz = (q.z - p.z) - p.gx * dx - p.gy * dy;
+  const float s = dz * terms.inv_sigma_depth / p.z;
+  const float exponent = 0.5f * s * s;
+  if (!(exponent < static_cast<float>(kMaxExponent))) return 0.0f;  // also rejects NaN
+  float w = exp_negative(exponent);
+  const float cos_angle = p.nx * q.nx + p.ny * q.ny + p.nz * q.nz;
   if (cos_angle > 0) {
-    w *= normal_term(std::min(cos_angle, 1.0), terms);
+    w *= normal_term(std::min(cos_angle, 1.0f), terms);
   } else if (has_normal(p) && has_normal(q)) {
-    return 0.0;
+    return 0.0f;
   }
   // An unknown (zero) normal leaves the decision to depth alone.
   return w;
@@ -107,22 +129,22 @@ double range_weight(const Surface& p, const Surface& q, double dx, double dy,
 // normalised is unknown; a radiance that is not finite counts as 0.
 Level make_base_level(const Image& noisy, const Image& depth, const Image& normal) {
   const int w = noisy.width(), h = noisy.height();
-  Level level{Image(w, h, 3), Image(w, h, kGuideCount)};
+  Level level{Image(w, h, 3), Guides(w, h)};
   parallel_for_rows(h, [&](int y) {
     for (int x = 0; x < w; ++x) {
       const std::size_t i = static_cast<std::size_t>(y) * w + x;
       const float z = depth.plane(0)[i];
       if (!(std::isfinite(z) && z > 0)) {
-        level.guides.plane(kDepth)[i] = kInf;  // radiance and normal stay 0
+        level.guides.px[i].z = kInf;  // radiance and normal stay 0
         continue;
       }
-      level.guides.plane(kDepth)[i] = z;
+      level.guides.px[i].z = z;
       const double nx = normal.plane(0)[i], ny = normal.plane(1)[i], nz = normal.plane(2)[i];
       const double length = std::sqrt(nx * nx + ny * ny + nz * nz);
       if (length > 0 && std::isfinite(length)) {
-        level.guides.plane(kNormalX)[i] = static_cast<float>(nx / length);
-        level.guides.plane(kNormalY)[i] = static_cast<float>(ny / length);
-        level.guides.plane(kNormalZ)[i] = static_cast<float>(nz / length);
+        level.guides.px[i].nx = static_cast<float>(nx / length);
+        level.guides.px[i].ny = static_cast<float>(ny / length);
+        level.guides.px[i].nz = static_cast<float>(nz / length);
       }
       for (int c = 0; c < 3; ++c) {
         const float v = noisy.plane(c)[i];
@@ -158,9 +180,10 @@ double axis_gradient(const DepthAt& z_at) {
   return 0.0;
 }
 
-void compute_depth_gradient(Image& guides) {
-  const int w = guides.width(), h = guides.height();
-  const float* depth = guides.plane(kDepth);
+void compute_depth_gradient(Guides& guides) {
+  const int w = guides.width, h = guides.height;
+  std::vector<float> depth(guides.px.size());
+  for (std::size_t i = 0; i < depth.size(); ++i) depth[i] = guides.px[i].z;
   parallel_for_rows(h, [&](int y) {
     for (int x = 0; x < w; ++x) {
       const std::size_t i = static_cast<std::size_t>(y) * w + x;
@@ -175,8 +198,8 @@ void compute_depth_gradient(Image& guides) {
           return yk >= 0 && yk < h ? depth[static_cast<std::size_t>(yk) * w + x] : kInf;
         }));
       }
-      guides.plane(kGradientX)[i] = gx;
-      guides.plane(kGradientY)[i] = gy;
+      guides.px[i].gx = gx;
+      guides.px[i].gy = gy;
     }
   });
 }
@@ -210,7 +233,7 @@ int pick_representative(const Surface* samples, int count) {
 Level downsample_with_guides(const Level& fine, const RangeTerms& terms) {
   const int fw = fine.radiance.width(), fh = fine.radiance.height();
   const int w = (fw + 1) / 2, h = (fh + 1) / 2;
-  Level coarse{Image(w, h, 3), Image(w, h, kGuideCount)};
+  Level coarse{Image(w, h, 3), Guides(w, h)};
   parallel_for_rows(h, [&](int y) {
     for (int x = 0; x < w; ++x) {
       const std::size_t i = static_cast<std::size_t>(y) * w + x;
@@ -221,8 +244,8 @@ Level downsample_with_guides(const Level& fine, const RangeTerms& terms) {
       for (int fy = 2 * y; fy < std::min(2 * y + 2, fh); ++fy) {
         for (int fx = 2 * x; fx < std::min(2 * x + 2, fw); ++fx) {
           const std::size_t j = static_cast<std::size_t>(fy) * fw + fx;
-          if (!is_surface(fine.guides.plane(kDepth)[j])) continue;
-          samples[count] = load_surface(fine.guides, j);
+          if (!is_surface(fine.guides.px[j].z)) continue;
+          samples[count] = fine.guides.px[j];
           index[count] = j;
           sx[count] = fx;
           sy[count] = fy;
@@ -230,7 +253,7 @@ Level downsample_with_guides(const Level& fine, const RangeTerms& terms) {
         }
       }
       if (count == 0) {
-        coarse.guides.plane(kDepth)[i] = kInf;
+        coarse.guides.px[i].z = kInf;
         continue;
       }
       const int r = pick_representative(samples.data(), count);
@@ -254,12 +277,12 @@ Level downsample_with_guides(const Level& fine, const RangeTerms& terms) {
       // Moving a depth along a steep gradient could in theory take it behind the camera or
       // beyond float range.
       const bool representable = z > 0 && z <= std::numeric_limits<float>::max();
-      coarse.guides.plane(kDepth)[i] = static_cast<float>(representable ? z : rep.z);
+      coarse.guides.px[i].z = static_cast<float>(representable ? z : rep.z);
       const double length = std::sqrt(nx * nx + ny * ny + nz * nz);
       if (length > 0) {
-        coarse.guides.plane(kNormalX)[i] = static_cast<float>(nx / length);
-        coarse.guides.plane(kNormalY)[i] = static_cast<float>(ny / length);
-        coarse.guides.plane(kNormalZ)[i] = static_cast<float>(nz / length);
+        coarse.guides.px[i].nx = static_cast<float>(nx / length);
+        coarse.guides.px[i].ny = static_cast<float>(ny / length);
+        coarse.guides.px[i].nz = static_cast<float>(nz / length);
       }
       for (int c = 0; c < 3; ++c) {
         coarse.radiance.plane(c)[i] = static_cast<float>(light[c] / weight_sum);
@@ -279,7 +302,7 @@ std::vector<double> gaussian_taps(int radius, double sigma) {
 // Joint bilateral filter of `radiance` guided by `guides`: a square window of `radius`, a
 // spatial Gaussian times `range_weight`. Used both at the coarsest level and as the blur
 // after each upsampling step.
-Image joint_bilateral(const Image& radiance, const Image& guides, int radius, double sigma_spatial,
+Image joint_bilateral(const Image& radiance, const Guides& guides, int radius, double sigma_spatial,
                       const RangeTerms& terms) {
   const int w = radiance.width(), h = radiance.height();
   const std::vector<double> taps = gaussian_taps(radius, sigma_spatial);
@@ -287,18 +310,17 @@ Image joint_bilateral(const Image& radiance, const Image& guides, int radius, do
   parallel_for_rows(h, [&](int y) {
     for (int x = 0; x < w; ++x) {
       const std::size_t i = static_cast<std::size_t>(y) * w + x;
-      if (!is_surface(guides.plane(kDepth)[i])) continue;
-      const Surface p = load_surface(guides, i);
+      if (!is_surface(guides.px[i].z)) continue;
+      const Surface p = guides.px[i];
       double weight_sum = 0;
       std::array<double, 3> light{};
       for (int qy = std::max(0, y - radius); qy <= std::min(h - 1, y + radius); ++qy) {
         for (int qx = std::max(0, x - radius); qx <= std::min(w - 1, x + radius); ++qx) {
           const std::size_t j = static_cast<std::size_t>(qy) * w + qx;
-          if (!is_surface(guides.plane(kDepth)[j])) continue;
+          if (!is_surface(guides.px[j].z)) continue;
           const double spatial = taps[std::abs(qx - x)] * taps[std::abs(qy - y)];
           // p itself counts fully, so that the sum below is never 0.
-          const double range =
-              j == i ? 1.0 : range_weight(p, load_surface(guides, j), qx - x, qy - y, terms);
+          const double range = j == i ? 1.0 : range_weight(p, guides.px[j], qx - x, qy - y, terms);
           const double wq = spatial * range;
           if (wq == 0) continue;
           weight_sum += wq;
@@ -324,7 +346,7 @@ AxisTaps upsampling_taps(int x) {
 // Joint bilateral upsampling (Kopf et al. 2007) of `coarse_light` to `fine`'s size: each fine
 // pixel takes its 4 nearest coarse samples with bilinear weights times their resemblance to
 // it, plus a little of its own unfiltered value (see kOwnValueWeight).
-Image bilateral_upsample(const Image& coarse_light, const Image& coarse_guides, const Level& fine,
+Image bilateral_upsample(const Image& coarse_light, const Guides& coarse_guides, const Level& fine,
                          const RangeTerms& terms) {
   const int w = fine.radiance.width(), h = fine.radiance.height();
   const int cw = coarse_light.width(), ch = coarse_light.height();
@@ -333,8 +355,8 @@ Image bilateral_upsample(const Image& coarse_light, const Image& coarse_guides, 
     const AxisTaps ty = upsampling_taps(y);
     for (int x = 0; x < w; ++x) {
       const std::size_t i = static_cast<std::size_t>(y) * w + x;
-      if (!is_surface(fine.guides.plane(kDepth)[i])) continue;
-      const Surface p = load_surface(fine.guides, i);
+      if (!is_surface(fine.guides.px[i].z)) continue;
+      const Surface p = fine.guides.px[i];
       const AxisTaps tx = upsampling_taps(x);
       double weight_sum = kOwnValueWeight;
       std::array<double, 3> light{};
@@ -346,11 +368,11 @@ Image bilateral_upsample(const Image& coarse_light, const Image& coarse_guides, 
           const int cx = std::clamp(tx.first + kx, 0, cw - 1);
           const double wx = kx ? tx.second_weight : 1 - tx.second_weight;
           const std::size_t j = static_cast<std::size_t>(cy) * cw + cx;
-          if (!is_surface(coarse_guides.plane(kDepth)[j])) continue;
+          if (!is_surface(coarse_guides.px[j].z)) continue;
           // Coarse sample centres sit at fine coordinate 2c + 1/2 (see downsample_with_guides).
-          const double wq = wx * wy *
-                            range_weight(p, load_surface(coarse_guides, j), 2 * cx + 0.5 - x,
-                                         2 * cy + 0.5 - y, terms);
+          const double wq =
+              wx * wy *
+              range_weight(p, coarse_guides.px[j], 2 * cx + 0.5 - x, 2 * cy + 0.5 - y, terms);
           if (wq == 0) continue;
           weight_sum += wq;
           for (int c = 0; c < 3; ++c) light[c] += wq * coarse_light.plane(c)[j];
@@ -414,7 +436,7 @@ Image upsample_and_denoise(const Image& light, int light_level, const Image& dep
     for (int c = 0; c < 3; ++c)
       for (std::size_t i = 0; i < at.plane_size(); ++i) {
         const float v = light.plane(c)[i];
-        at.plane(c)[i] = is_surface(level.guides.plane(kDepth)[i]) && std::isfinite(v) ? v : 0.0f;
+        at.plane(c)[i] = is_surface(level.guides.px[i].z) && std::isfinite(v) ? v : 0.0f;
       }
   };
   const int deepest = denoise ? std::max(settings.levels, light_level) : light_level;
@@ -441,7 +463,9 @@ Image upsample_and_denoise(const Image& light, int light_level, const Image& dep
       for (int x = 0; x < fine.radiance.width(); ++x)
         for (int c = 0; c < 3; ++c)
           fine.radiance.at(c, x, y) =
-              is_surface(fine.guides.at(kDepth, x, y)) ? coarse.at(c, x / 2, y / 2) : 0.0f;
+              is_surface(fine.guides.px[static_cast<std::size_t>(y) * fine.guides.width + x].z)
+                  ? coarse.at(c, x / 2, y / 2)
+                  : 0.0f;
   }
 
   Image out = denoise ? joint_bilateral(levels.back().radiance, levels.back().guides,
