@@ -21,9 +21,12 @@ settings=(
   "env black, 1 bounce|--miss env --bounces 1 --temporal none"
   "env black, 8 bounces|--miss env --temporal none"
   "frame estimate, 8 bounces|--miss frame --temporal none"
-  "edge extension, 8 bounces|--miss extend --temporal none"
+  "edge extension, 8 bounces (march)|--miss extend --temporal none --tracer march --max-steps 64"
   "auto, 8 bounces, no temporal|--temporal none"
-  "default (auto, 8 rays, 8 bounces, window ±2)|"
+  "march (the previous default: 8 rays, 64 steps)|--tracer march --max-steps 64"
+  "preset draft|--preset draft"
+  "default (slices 2x28, auto, 8 bounces, window ±2)|"
+  "preset final|--preset final"
 )
 printf '| scene | setting | relRMSE indirect | relRMSE composite | s/frame |\n'
 printf '|---|---|---|---|---|\n'
