@@ -1,0 +1,134 @@
+// The denoiser's range weight (how much a sample belongs to a pixel's surface) and its SIMD
+// kernel: a batch of pixel-sample pairs in, one weight each out. The kernel does each pair's
+// arithmetic in the scalar twin's order (no fused multiply-add, the same polynomial), so the
+// two agree bit for bit on every target, and SSGI_SIMD=scalar switches to the twin.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <vector>
+
+#include "ssgi/settings.h"
+
+namespace ssgi::detail {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+// Beyond this exponent a weight is below 2e-22, far under the float resolution of any sum it
+// would join, so it is taken as 0 without calling exp.
+constexpr float kMaxExponent = 50.0f;
+
+// One pixel's guides: depth (+inf on background), unit normal (0 where unknown), and the
+// depth change per pixel along x and y on the pixel's own surface (see `axis_gradient`).
+// Stored together (24 bytes a pixel): a filter tap reads one pixel's guides at once.
+struct Surface {
+  float z = kInf, nx = 0, ny = 0, nz = 0, gx = 0, gy = 0;
+};
+
+inline bool is_surface(float z) { return z < kInf; }
+inline bool has_normal(const Surface& s) { return s.nx != 0 || s.ny != 0 || s.nz != 0; }
+
+struct RangeTerms {
+  float inv_sigma_depth;  // 1 / relative depth difference at which the weight is exp(-1/2)
+  float normal_power;
+  int integer_normal_power;  // normal_power when it is a whole number up to 64, else -1
+};
+
+inline RangeTerms make_range_terms(const DenoiseSettings& s) {
+  const float p = s.normal_power;
+  const bool whole = p == std::floor(p) && p <= 64;
+  return {1.0f / s.sigma_depth, p, whole ? static_cast<int>(p) : -1};
+}
+
+// x^p for x in [0, 1]. Whole powers (the default 32 among them) by repeated squaring, which
+// is several times faster than std::pow in the innermost loop.
+inline float normal_term(float x, const RangeTerms& terms) {
+  int n = terms.integer_normal_power;
+  if (n < 0) return std::pow(x, terms.normal_power);
+  float result = 1;
+  for (; n > 0; n >>= 1, x *= x) {
+    if (n & 1) result *= x;
+  }
+  return result;
+}
+
+// exp(-e) for e in [0, kMaxExponent), to about 2e-7 relative: 2^-e log2(e) split into an
+// exponent and a polynomial for 2^f on [0, 1). No libm call in the innermost loop, and the same
+// bits on every platform.
+inline __attribute__((always_inline)) float exp_negative(float e) {
+  const float t = -e * 1.44269504f;
+  const float whole = std::floor(t);
+  const float f = t - whole;
+  const float p =
+      1.0f +
+      f * (0.6931472f +
+           f * (0.2402265f +
+                f * (0.05550357f + f * (0.009618129f + f * (0.001333355f + f * 0.0001540353f)))));
+  const std::int32_t bits = (static_cast<std::int32_t>(whole) + 127) << 23;
+  float scale;
+  std::memcpy(&scale, &bits, sizeof scale);
+  return p * scale;
+}
+
+// How much sample q belongs to p's surface: 1 for p itself, ~0 across an edge or a crease.
+// (dx, dy) is q's position relative to p, in p's pixels.
+inline __attribute__((always_inline)) float range_weight(const Surface& p, const Surface& q,
+                                                         float dx, float dy,
+                                                         const RangeTerms& terms) {
+  // q's depth against p's extrapolated along p's screen-space depth gradient, so that a slanted
+  // plane passes as one surface; relative to p's depth, so that the test does not depend on
+  // the scene's scale. An overflow gives inf or NaN, which the test below rejects.
+  const float dz = (q.z - p.z) - p.gx * dx - p.gy * dy;
+  const float s = dz * terms.inv_sigma_depth / p.z;
+  const float exponent = 0.5f * s * s;
+  if (!(exponent < kMaxExponent)) return 0.0f;  // also rejects NaN
+  float w = exp_negative(exponent);
+  const float cos_angle = p.nx * q.nx + p.ny * q.ny + p.nz * q.nz;
+  if (cos_angle > 0) {
+    w *= normal_term(std::min(cos_angle, 1.0f), terms);
+  } else if (has_normal(p) && has_normal(q)) {
+    return 0.0f;
+  }
+  // An unknown (zero) normal leaves the decision to depth alone.
+  return w;
+}
+
+// Pairs (p, q, dx, dy) as a structure of arrays.
+struct RangeBatch {
+  std::vector<float> pz, pnx, pny, pnz, pgx, pgy, qz, qnx, qny, qnz, dx, dy;
+
+  std::size_t size() const { return size_; }
+  // Room for n pairs (contents unspecified until set).
+  void resize(std::size_t n) {
+    size_ = n;
+    for (std::vector<float>* v : fields())
+      if (v->size() < n) v->resize(n);
+  }
+  void set(std::size_t k, const Surface& p, const Surface& q, float x, float y) {
+    pz[k] = p.z, pnx[k] = p.nx, pny[k] = p.ny, pnz[k] = p.nz, pgx[k] = p.gx, pgy[k] = p.gy;
+    qz[k] = q.z, qnx[k] = q.nx, qny[k] = q.ny, qnz[k] = q.nz, dx[k] = x, dy[k] = y;
+  }
+
+ private:
+  std::vector<std::vector<float>*> fields() {
+    return {&pz, &pnx, &pny, &pnz, &pgx, &pgy, &qz, &qnx, &qny, &qnz, &dx, &dy};
+  }
+  std::size_t size_ = 0;
+};
+
+// out[k] = range_weight of pair k, for every pair of the batch: with the widest SIMD target
+// the CPU has (Highway's dynamic dispatch) unless SSGI_SIMD=scalar, or the power is not a
+// whole number (std::pow has no SIMD twin here).
+void range_weights(const RangeBatch& batch, const RangeTerms& terms, float* out);
+
+// The scalar twin of range_weights, for the tests.
+void range_weights_scalar(const RangeBatch& batch, const RangeTerms& terms, float* out);
+
+// Whether SSGI_SIMD=scalar forces every kernel's scalar twin (read once).
+bool simd_forced_scalar();
+
+}  // namespace ssgi::detail
