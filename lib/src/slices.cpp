@@ -10,13 +10,14 @@
 #include "directions.h"
 #include "march.h"
 #include "parallel.h"
+#include "slice_kernel.h"
 #include "surface_model.h"
 
 namespace ssgi::detail {
 namespace {
 
 constexpr int kSectors = 32;
-constexpr float kPi = 3.14159265358979f;
+constexpr float kPi = kSlicePi;
 
 struct V3 {
   float x, y, z;
@@ -30,38 +31,10 @@ V3 cross(V3 a, V3 b) {
 }
 V3 normalized(V3 a) { return (1.0f / std::sqrt(dot(a, a))) * a; }
 
-// atan2 to about 1e-5 rad with a polynomial (no libm call in the inner loop; the same bits on
-// every platform).
-float fast_atan2(float y, float x) {
-  const float ax = std::fabs(x), ay = std::fabs(y);
-  const float hi = std::max(ax, ay), lo = std::min(ax, ay);
-  if (hi == 0) return 0.0f;
-  const float a = lo / hi, s = a * a;
-  // Minimax polynomial for atan on [0, 1].
-  float r =
-      ((((((-0.0040540580f * s + 0.0218612288f) * s - 0.0559098861f) * s + 0.0964200441f) * s -
-         0.1390853351f) *
-            s +
-        0.1994653599f) *
-           s -
-       0.3332985605f) *
-          s * a +
-      a;
-  if (ay > ax) r = 0.5f * kPi - r;
-  if (x < 0) r = kPi - r;
-  return y < 0 ? -r : r;
-}
-
 // An angle in the slice, from the view vector towards T, with its sine and cosine.
 struct Angle {
   float theta, s, c;
 };
-
-Angle angle_of(V3 w, V3 view, V3 t) {
-  const float c = dot(w, view), s = dot(w, t);
-  const float inv = 1.0f / std::sqrt(c * c + s * s);
-  return {fast_atan2(s, c), s * inv, c * inv};
-}
 
 // The slice's measure cos(theta - gamma) |sin theta| integrated from 0 to theta, as a function
 // that increases over the hemisphere [gamma - pi/2, gamma + pi/2].
@@ -201,6 +174,27 @@ class PackedMesh {
   std::vector<Texel> texels_;
 };
 
+// One side of a slice: the samples that met the mesh, in order (structure of arrays for the
+// kernel), with their sector coordinates once computed.
+struct SideSamples {
+  std::vector<int> step, pixel;
+  std::vector<float> x, y, z, depth, front_u, back_u;
+  std::vector<V3> normal;
+  void clear() {
+    step.clear(), pixel.clear(), x.clear(), y.clear(), z.clear(), depth.clear(), normal.clear();
+  }
+  void add(int j, const PackedMesh::Hit& hit, const V3& front) {
+    step.push_back(j), pixel.push_back(hit.pixel), depth.push_back(hit.z),
+        normal.push_back(hit.normal);
+    x.push_back(front.x), y.push_back(front.y), z.push_back(front.z);
+  }
+};
+
+SideSamples& scratch() {
+  thread_local SideSamples samples;
+  return samples;
+}
+
 struct SliceTracer {
   const GBuffer& g;
   const TraceGrid& grid;
@@ -306,20 +300,20 @@ struct SliceTracer {
                                   (kPi * static_cast<float>(kSectors) * static_cast<float>(slices));
       const float to_sector = static_cast<float>(kSectors) / h_total;
       total_weight += sector_weight * static_cast<float>(kSectors);
-      auto sectors = [&](Angle a, Angle b) -> std::uint32_t {
-        if (a.theta > b.theta) std::swap(a, b);
-        if (a.theta < lowest.theta) a = lowest;
-        if (b.theta > highest.theta) b = highest;
-        if (!(b.theta > a.theta)) return 0;
-        // Sector k is the ray at measure (k + u_rot) / kSectors of the slice.
-        const float fa = (measure(a) - h_lo) * to_sector - u_rot;
-        const float fb = (measure(b) - h_lo) * to_sector - u_rot;
-        const int k0 = std::max(0, static_cast<int>(std::ceil(fa)));
-        const int k1 = std::min(kSectors - 1, static_cast<int>(std::floor(fb)));
+      // Sectors ceil(a) .. floor(b) of sector coordinates a < b (see sector_coordinate).
+      auto sectors = [&](float a, float b) -> std::uint32_t {
+        if (!(b > a)) return 0;
+        const int k0 = std::max(0, static_cast<int>(std::ceil(a)));
+        const int k1 = std::min(kSectors - 1, static_cast<int>(std::floor(b)));
         if (k1 < k0) return 0;
         const std::uint32_t upto = k1 == 31 ? all : (1u << (k1 + 1)) - 1;
         return upto & ~((1u << k0) - 1);
       };
+      const SliceFrame frame{
+          origin.x,  origin.y, origin.z,     view.x,        view.y,
+          view.z,    t.x,      t.y,          t.z,           1.0f + model.thickness,
+          cg,        sg,       lowest.theta, highest.theta, h_lo,
+          to_sector, u_rot};
 
       std::uint32_t mask = 0;
       for (int side = 0; side < 2 && mask != all; ++side) {
@@ -332,56 +326,56 @@ struct SliceTracer {
         if (sy < 0) t_max = std::min(t_max, -qy / sy);
         t_max *= 0.99999f;
         if (!(t_max > 1.0f)) continue;
-        bool prev_valid = false;
-        float prev_z = 0;
-        Angle prev_a{}, prev_b{};
-        V3 prev_n{0, 0, 0}, prev_front{0, 0, 0};
-        // Quadratic spacing: dense near the origin (contact), sparse far away.
-        auto distance_of = [&](int j) {
+        // The samples along the side that meet the mesh, quadratically spaced: dense near the
+        // origin (contact), sparse far away; up to the first beyond --max-distance.
+        SideSamples& side_samples = scratch();
+        side_samples.clear();
+        for (int j = 0; j < steps; ++j) {
           const float f = (static_cast<float>(j) + u_step) / static_cast<float>(steps);
-          return 1.0f + (t_max - 1.0f) * f * f;
-        };
-        for (int j = 0; j < steps && mask != all; ++j) {
-          const float dist = distance_of(j);
+          const float dist = 1.0f + (t_max - 1.0f) * f * f;
           PackedMesh::Hit surface;
           const float px = qx + sx * dist, py = qy + sy * dist;
-          if (!mesh.surface_at(px, py, &surface)) {
-            prev_valid = false;
-            continue;
-          }
+          if (!mesh.surface_at(px, py, &surface)) continue;
           const V3 front = surface.z * ray(px, py);
           if (max_distance > 0 && dot(front - origin, front - origin) > max_distance * max_distance)
             break;
-          const V3 back = (1.0f + model.thickness) * front;
-          const Angle a = angle_of(front - origin, view, t), b = angle_of(back - origin, view, t);
-          std::uint32_t bits = sectors(a, b);
-          // Between two samples of one continuous surface, the strip joining their slabs.
-          const V3 sn = surface.normal;
-          // Samples far apart on one plane (a floor seen at a grazing angle) differ in depth by
-          // more than a slab but are one surface: the mesh joins every pixel between them.
-          const bool coplanar = prev_valid && dot(sn, prev_n) > 0.9f &&
-                                std::fabs(dot(prev_n, front - prev_front)) <=
-                                    model.thickness * std::min(prev_z, surface.z);
-          if (prev_valid && (coplanar || model.connected(prev_z, surface.z))) {
-            Angle lo = a.theta < b.theta ? a : b, hi = a.theta < b.theta ? b : a;
-            for (const Angle& q : {prev_a, prev_b}) {
-              if (q.theta < lo.theta) lo = q;
-              if (q.theta > hi.theta) hi = q;
+          side_samples.add(j, surface, front);
+        }
+        const std::size_t count = side_samples.step.size();
+        side_samples.front_u.resize(count);
+        side_samples.back_u.resize(count);
+        slab_sector_coordinates(frame, side_samples.x.data(), side_samples.y.data(),
+                                side_samples.z.data(), count, side_samples.front_u.data(),
+                                side_samples.back_u.data());
+        for (std::size_t k = 0; k < count && mask != all; ++k) {
+          const float fa = side_samples.front_u[k], fb = side_samples.back_u[k];
+          float lo = std::min(fa, fb), hi = std::max(fa, fb);
+          std::uint32_t bits = sectors(lo, hi);
+          // Between two consecutive samples of one continuous surface, the strip joining their
+          // slabs. Samples far apart on one plane (a floor seen at a grazing angle) differ in
+          // depth by more than a slab but are one surface: the mesh joins every pixel between.
+          if (k > 0 && side_samples.step[k - 1] + 1 == side_samples.step[k]) {
+            const V3 front{side_samples.x[k], side_samples.y[k], side_samples.z[k]};
+            const V3 prev_front{side_samples.x[k - 1], side_samples.y[k - 1],
+                                side_samples.z[k - 1]};
+            const V3& sn = side_samples.normal[k];
+            const V3& prev_n = side_samples.normal[k - 1];
+            const float z = side_samples.depth[k], prev_z = side_samples.depth[k - 1];
+            const bool coplanar =
+                dot(sn, prev_n) > 0.9f &&
+                std::fabs(dot(prev_n, front - prev_front)) <= model.thickness * std::min(prev_z, z);
+            if (coplanar || model.connected(prev_z, z)) {
+              lo = std::min(lo, std::min(side_samples.front_u[k - 1], side_samples.back_u[k - 1]));
+              hi = std::max(hi, std::max(side_samples.front_u[k - 1], side_samples.back_u[k - 1]));
+              bits |= sectors(lo, hi);
             }
-            bits |= sectors(lo, hi);
           }
           const std::uint32_t fresh = bits & ~mask;
           if (fresh) {
-            pixels->push_back(surface.pixel);
+            pixels->push_back(side_samples.pixel[k]);
             weights->push_back(sector_weight * static_cast<float>(__builtin_popcount(fresh)));
             mask |= fresh;
           }
-          prev_valid = true;
-          prev_z = surface.z;
-          prev_n = sn;
-          prev_front = front;
-          prev_a = a;
-          prev_b = b;
         }
       }
       const std::uint32_t missed = ~mask;
