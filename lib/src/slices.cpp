@@ -180,13 +180,30 @@ struct SideSamples {
   std::vector<int> step, pixel;
   std::vector<float> x, y, z, depth, front_u, back_u;
   std::vector<V3> normal;
-  void clear() {
-    step.clear(), pixel.clear(), x.clear(), y.clear(), z.clear(), depth.clear(), normal.clear();
+  std::size_t count = 0;
+  // Room for `most` samples, none taken; the coordinate arrays padded to whole vectors.
+  void reset(std::size_t most) {
+    if (step.size() < most) {
+      step.resize(most), pixel.resize(most), depth.resize(most), normal.resize(most);
+      x.resize(most + 16), y.resize(most + 16), z.resize(most + 16);
+      front_u.resize(most + 16), back_u.resize(most + 16);
+    }
+    count = 0;
   }
   void add(int j, const PackedMesh::Hit& hit, const V3& front) {
-    step.push_back(j), pixel.push_back(hit.pixel), depth.push_back(hit.z),
-        normal.push_back(hit.normal);
-    x.push_back(front.x), y.push_back(front.y), z.push_back(front.z);
+    step[count] = j, pixel[count] = hit.pixel, depth[count] = hit.z, normal[count] = hit.normal;
+    x[count] = front.x, y[count] = front.y, z[count] = front.z;
+    ++count;
+  }
+  // The count rounded up to a multiple of 16, the padding copies of the last sample (or of the
+  // origin's neighbourhood when there is none), so that the kernel runs on whole vectors.
+  std::size_t padded() {
+    const std::size_t n = (count + 15) / 16 * 16;
+    for (std::size_t k = count; k < n; ++k) {
+      x[k] = count ? x[count - 1] : 0.0f, y[k] = count ? y[count - 1] : 0.0f,
+      z[k] = count ? z[count - 1] : 1.0f;
+    }
+    return n;
   }
 };
 
@@ -329,7 +346,7 @@ struct SliceTracer {
         // The samples along the side that meet the mesh, quadratically spaced: dense near the
         // origin (contact), sparse far away; up to the first beyond --max-distance.
         SideSamples& side_samples = scratch();
-        side_samples.clear();
+        side_samples.reset(static_cast<std::size_t>(steps));
         for (int j = 0; j < steps; ++j) {
           const float f = (static_cast<float>(j) + u_step) / static_cast<float>(steps);
           const float dist = 1.0f + (t_max - 1.0f) * f * f;
@@ -341,12 +358,10 @@ struct SliceTracer {
             break;
           side_samples.add(j, surface, front);
         }
-        const std::size_t count = side_samples.step.size();
-        side_samples.front_u.resize(count);
-        side_samples.back_u.resize(count);
+        const std::size_t count = side_samples.count;
         slab_sector_coordinates(frame, side_samples.x.data(), side_samples.y.data(),
-                                side_samples.z.data(), count, side_samples.front_u.data(),
-                                side_samples.back_u.data());
+                                side_samples.z.data(), side_samples.padded(),
+                                side_samples.front_u.data(), side_samples.back_u.data());
         for (std::size_t k = 0; k < count && mask != all; ++k) {
           const float fa = side_samples.front_u[k], fb = side_samples.back_u[k];
           float lo = std::min(fa, fb), hi = std::max(fa, fb);
