@@ -1043,8 +1043,8 @@ TEST_F(Cli, PresetsSetTheirSettingsAndGivenOptionsOverrideThem) {
   EXPECT_EQ(draft["settings"]["bounces"], "4");
   const nlohmann::json fin = settings_of({"--slices", "3", "--preset=final"});
   EXPECT_EQ(fin["preset"], "final");
-  EXPECT_EQ(fin["settings"]["slices"], "3");  // given, so not the preset's 6
-  EXPECT_EQ(fin["settings"]["trace-scale"], "auto (960 across)");
+  EXPECT_EQ(fin["settings"]["slices"], "3");  // given, so not the preset's 4
+  EXPECT_EQ(fin["settings"]["trace-scale"], "auto (480 across)");
   EXPECT_EQ(fin["settings"]["max-steps"], "28");
   expect_usage_error(run_ssgi({"info", in, "--preset", "best"}), "info",
                      "unknown --preset 'best' (draft, default, final)");

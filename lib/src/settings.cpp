@@ -18,7 +18,7 @@ struct PresetRow {
 constexpr PresetRow kPresets[] = {
     {"draft", 1, 16, 240, 4},
     {"default", 2, 28, 480, 8},
-    {"final", 6, 28, 960, 8},
+    {"final", 4, 28, 480, 8},
 };
 
 const char* tracer_name(Tracer t) {
