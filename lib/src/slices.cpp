@@ -221,6 +221,7 @@ struct SliceTracer {
   PackedMesh mesh;
   int w, h;              // the frame's data window
   float fx, fy, cx, cy;  // the camera in trace-grid units
+  float inv_fx, inv_fy;
   double cam_to_world[3][3];
 
   SliceTracer(const GBuffer& gb, const TraceGrid& gr, const GiSettings& s, const Environment& e)
@@ -235,7 +236,9 @@ struct SliceTracer {
         fx(gr.fx),
         fy(gr.fy),
         cx(gr.cx),
-        cy(gr.cy) {
+        cy(gr.cy),
+        inv_fx(1.0f / gr.fx),
+        inv_fy(1.0f / gr.fy) {
     const Camera& cam = gb.camera;
     const Mat4d inv = cam.has_world_transform ? cam.world_to_camera.inverse() : Mat4d();
     for (int i = 0; i < 3; ++i)
@@ -243,7 +246,7 @@ struct SliceTracer {
   }
 
   // The camera-space direction through trace-grid coordinates (sx, sy), at z = 1.
-  V3 ray(float sx, float sy) const { return {(sx - cx) / fx, (cy - sy) / fy, 1.0f}; }
+  V3 ray(float sx, float sy) const { return {(sx - cx) * inv_fx, (cy - sy) * inv_fy, 1.0f}; }
 
   std::array<float, 3> env_radiance(V3 d) const {
     if (env.is_constant()) return env.radiance({d.x, d.y, d.z});
@@ -345,10 +348,11 @@ struct SliceTracer {
         if (!(t_max > 1.0f)) continue;
         // The samples along the side that meet the mesh, quadratically spaced: dense near the
         // origin (contact), sparse far away; up to the first beyond --max-distance.
+        const float inv_steps = 1.0f / static_cast<float>(steps);
         SideSamples& side_samples = scratch();
         side_samples.reset(static_cast<std::size_t>(steps));
         for (int j = 0; j < steps; ++j) {
-          const float f = (static_cast<float>(j) + u_step) / static_cast<float>(steps);
+          const float f = (static_cast<float>(j) + u_step) * inv_steps;
           const float dist = 1.0f + (t_max - 1.0f) * f * f;
           PackedMesh::Hit surface;
           const float px = qx + sx * dist, py = qy + sy * dist;
