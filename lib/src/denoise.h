@@ -22,9 +22,12 @@ Image denoise_pyramid(const Image& noisy, const Image& depth, const Image& norma
 
 // The same pyramid for light traced at a coarser level: `light` is the size of pyramid level
 // `light_level` (the data window halved that many times, rounding up; see gather.h's trace
-// grid), and is carried up to full resolution by joint bilateral upsampling, filtered on the
-// way when `denoise` is set (as denoise_pyramid), else only upsampled.
+// grid), and is carried up to level `output_level` (<= light_level; 0 is full resolution) by
+// joint bilateral upsampling, filtered on the way when `denoise` is set (as denoise_pyramid),
+// else only upsampled. The pipeline denoises at the grid's level, filters over time there, and
+// upsamples to full resolution last.
 Image upsample_and_denoise(const Image& light, int light_level, const Image& depth,
-                           const Image& normal, const DenoiseSettings& settings, bool denoise);
+                           const Image& normal, const DenoiseSettings& settings, bool denoise,
+                           int output_level = 0);
 
 }  // namespace ssgi::detail

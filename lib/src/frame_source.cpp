@@ -14,22 +14,6 @@ namespace {
 // fraction of the largest indirect value (see ema_preroll_frames).
 constexpr double kEmaPrerollBound = 1e-3;
 
-// What the temporal stage reads of a neighbour: its geometry, camera and motion; the passes
-// only the composite needs are left out.
-std::shared_ptr<const GBuffer> geometry_of(const GBuffer& g) {
-  auto out = std::make_shared<GBuffer>();
-  out->path = g.path;
-  out->frame = g.frame;
-  out->display_window = g.display_window;
-  out->data_window = g.data_window;
-  out->camera = g.camera;
-  out->depth = g.depth;
-  out->normal = g.normal;
-  out->motion_prev = g.motion_prev;
-  out->motion_next = g.motion_next;
-  return out;
-}
-
 // Adds the wall time of its life, in milliseconds, to *total.
 class StopWatch {
  public:
@@ -58,8 +42,13 @@ GBuffer FrameSource::read(int frame) const {
 FrameSource::Lit FrameSource::light(int frame) const {
   auto g = std::make_shared<GBuffer>(read(frame));
   const StopWatch watch(&gi_ms_);
-  Image indirect = pipeline_.indirect_light(*g);
-  return {std::move(g), std::move(indirect)};
+  Pipeline::TracedLight traced = pipeline_.trace_light(*g);
+  return {std::move(g), std::move(traced)};
+}
+
+Image FrameSource::finish(const GBuffer& g, const Image& grid_light) const {
+  const StopWatch watch(&gi_ms_);
+  return pipeline_.finish_light(g, grid_light);
 }
 
 FrameSource::Result FrameSource::get(int frame) {
@@ -73,7 +62,8 @@ FrameSource::Result FrameSource::get(int frame) {
       break;
   }
   Lit lit = light(frame);
-  return {std::move(lit.g), std::move(lit.indirect)};
+  Image indirect = finish(*lit.g, lit.traced.light);
+  return {std::move(lit.g), std::move(indirect)};
 }
 
 FrameSource::Result FrameSource::window(int frame) {
@@ -107,19 +97,20 @@ FrameSource::Result FrameSource::window(int frame) {
       }
     }
     if (f == frame) center = static_cast<int>(frames.size());
-    frames.push_back(it->second.g.get());
-    indirect.push_back(&it->second.indirect);
+    frames.push_back(&it->second.traced.grid);
+    indirect.push_back(&it->second.traced.light);
   }
   Lit& own = ring_.at(frame);
-  Result result{own.g, {}};
+  Image filtered;
   {
     const StopWatch watch(&gi_ms_);
-    result.indirect = temporal_window(frames, indirect, center, k);
+    filtered = temporal_window(frames, indirect, center, k);
   }
+  Result result{own.g, finish(*own.g, filtered)};
   // From now on the frame is only a neighbour (the caller holds the whole G-buffer for the
-  // composite): keep what reprojection reads, so that the ring holds the passes of the frames
+  // composite): reprojection reads its trace grid, so the ring holds the passes of the frames
   // still to be written only.
-  own.g = geometry_of(*own.g);
+  own.g.reset();
   own.full = false;
   return result;
 }
@@ -155,17 +146,18 @@ FrameSource::Result FrameSource::ema(int frame) {
   Lit lit = light(frame);
   std::shared_ptr<const GBuffer> g = lit.g;
   ema_step(target, std::move(lit));
-  return {std::move(g), ema_out_};
+  Image indirect = finish(*g, ema_out_);
+  return {std::move(g), std::move(indirect)};
 }
 
 void FrameSource::ema_step(int index, Lit lit) {
   const StopWatch watch(&gi_ms_);
   const bool follows = ema_valid_ && ema_index_ == index - 1;
-  ema_out_ = follows ? temporal_ema(*lit.g, lit.indirect, *ema_g_, ema_out_,
+  ema_out_ = follows ? temporal_ema(lit.traced.grid, lit.traced.light, *ema_g_, ema_out_,
                                     pipeline_.settings().ema_alpha)
-                     : std::move(lit.indirect);
-  // The next step reprojects from this frame: its geometry is all it reads.
-  ema_g_ = geometry_of(*lit.g);
+                     : std::move(lit.traced.light);
+  // The next step reprojects from this frame: its trace grid is all it reads.
+  ema_g_ = std::make_shared<GBuffer>(std::move(lit.traced.grid));
   ema_index_ = index;
   ema_valid_ = true;
 }

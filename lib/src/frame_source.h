@@ -33,11 +33,14 @@ class FrameSource {
 
  private:
   struct Lit {
-    std::shared_ptr<const GBuffer> g;
-    Image indirect;    // the frame's own light, before temporal filtering
-    bool full = true;  // false once only what reprojection reads is kept
+    std::shared_ptr<const GBuffer> g;  // the frame, for the composite and the denoiser
+    Pipeline::TracedLight traced;      // its light on the trace grid, before temporal filtering
+    bool full = true;  // false once the frame's passes are dropped (the grid is what
+                       // reprojection reads)
   };
   Lit light(int frame) const;
+  // The traced light carried to the frame's resolution (Pipeline::finish_light), timed.
+  Image finish(const GBuffer& g, const Image& grid_light) const;
   Result window(int frame);
   Result ema(int frame);
   // One step of the running average over the frame at `index` in frames_on_disk.
@@ -53,8 +56,8 @@ class FrameSource {
   // EMA: the last frame stepped (its index in frames_on_disk) and its filtered output.
   int ema_index_ = 0;
   bool ema_valid_ = false;
-  std::shared_ptr<const GBuffer> ema_g_;
-  Image ema_out_;
+  std::shared_ptr<const GBuffer> ema_g_;  // the last frame stepped's trace grid
+  Image ema_out_;                         // its filtered light on the grid
 };
 
 }  // namespace ssgi::detail

@@ -203,7 +203,48 @@ Pipeline::~Pipeline() = default;
 const Plan& Pipeline::plan() const { return impl_->plan; }
 const GiSettings& Pipeline::settings() const { return impl_->settings; }
 
-Image Pipeline::indirect_light(const GBuffer& g) const {
+namespace {
+
+// The trace grid as a G-buffer in grid units, for the temporal stage: its mesh's depth and
+// normals, the motion of its traced pixels (in grid pixels), the camera scaled to the grid.
+GBuffer grid_gbuffer(const GBuffer& g, const detail::TraceGrid& grid) {
+  GBuffer out;
+  out.path = g.path;
+  out.frame = g.frame;
+  out.display_window = out.data_window = {0, 0, grid.width, grid.height};
+  out.camera = g.camera;
+  out.camera.fx = grid.fx;
+  out.camera.fy = grid.fy;
+  out.camera.cx = grid.cx;
+  out.camera.cy = grid.cy;
+  out.depth = grid.depth;
+  out.normal = grid.normal;
+  const float inv_scale = 1.0f / static_cast<float>(grid.scale);
+  auto motion = [&](const Image& full) {
+    if (full.channels() < 2) return Image();
+    Image m(grid.width, grid.height, 2);
+    for (std::size_t s = 0; s < grid.origin.size(); ++s) {
+      const std::int32_t p = grid.origin[s];
+      if (p < 0) continue;
+      for (int c = 0; c < 2; ++c) m.plane(c)[s] = full.plane(c)[p] * inv_scale;
+    }
+    return m;
+  };
+  out.motion_prev = motion(g.motion_prev);
+  out.motion_next = motion(g.motion_next);
+  return out;
+}
+
+// The denoiser's pyramid level of a trace scale (1 -> 0, 2 -> 1, 4 -> 2, 8 -> 3).
+int pyramid_level(int scale) {
+  int level = 0;
+  for (int k = scale; k > 1; k /= 2) ++level;
+  return level;
+}
+
+}  // namespace
+
+Pipeline::TracedLight Pipeline::trace_light(const GBuffer& g) const {
   const GiSettings& s = impl_->settings;
   const Plan& plan = impl_->plan;
   const Image reflected = detail::reflected_radiance(g, plan.gather_emission);
@@ -222,13 +263,26 @@ Image Pipeline::indirect_light(const GBuffer& g) const {
       hits = detail::trace_slices(g, grid, s, impl_->env);
       break;
   }
-  const Image traced = detail::gather_bounces(grid, hits, s.bounces, closure);
+  TracedLight out;
+  out.light = detail::gather_bounces(grid, hits, s.bounces, closure);
   hits = {};
-  int level = 0;
-  for (int k = plan.trace_scale; k > 1; k /= 2) ++level;
-  if (level == 0 && !plan.denoise) return traced;
-  return detail::upsample_and_denoise(traced, level, g.depth, g.normal, s.denoise_settings,
-                                      plan.denoise);
+  const int level = pyramid_level(plan.trace_scale);
+  if (plan.denoise)
+    out.light = detail::upsample_and_denoise(out.light, level, g.depth, g.normal,
+                                             s.denoise_settings, true, level);
+  out.grid = grid_gbuffer(g, grid);
+  return out;
+}
+
+Image Pipeline::finish_light(const GBuffer& g, const Image& grid_light) const {
+  const int level = pyramid_level(impl_->plan.trace_scale);
+  if (level == 0) return grid_light;
+  return detail::upsample_and_denoise(grid_light, level, g.depth, g.normal,
+                                      impl_->settings.denoise_settings, false);
+}
+
+Image Pipeline::indirect_light(const GBuffer& g) const {
+  return finish_light(g, trace_light(g).light);
 }
 
 FrameResult Pipeline::composite(const GBuffer& g, Image indirect) const {

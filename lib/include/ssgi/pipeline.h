@@ -45,8 +45,21 @@ class Pipeline {
   const Plan& plan() const;
   const GiSettings& settings() const;
 
-  // Directions, march, misses, bounces and denoise: the frame's indirect light (3 channels),
-  // before any temporal filtering.
+  // The light as traced (misses and bounces included) and denoised, at the trace grid's
+  // resolution, with the grid's geometry as a G-buffer in grid units (depth, normals, motion and
+  // camera; windows from (0, 0)): what the temporal stage filters.
+  struct TracedLight {
+    GBuffer grid;
+    Image light;  // 3 channels, the grid's size
+  };
+  TracedLight trace_light(const GBuffer& frame) const;
+
+  // Light on the trace grid (temporally filtered or not) carried to the frame's resolution by
+  // the denoiser's bilateral upsampling.
+  Image finish_light(const GBuffer& frame, const Image& grid_light) const;
+
+  // trace_light then finish_light: the frame's indirect light (3 channels) without temporal
+  // filtering.
   Image indirect_light(const GBuffer& frame) const;
 
   // The composite stage: outputs from the (temporally filtered) indirect light.
