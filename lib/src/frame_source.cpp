@@ -61,9 +61,10 @@ FrameSource::Result FrameSource::get(int frame) {
     case TemporalMode::kNone:
       break;
   }
-  Lit lit = light(frame);
-  Image indirect = finish(*lit.g, lit.traced.light);
-  return {std::move(lit.g), std::move(indirect)};
+  auto g = std::make_shared<GBuffer>(read(frame));
+  const StopWatch watch(&gi_ms_);
+  Image indirect = pipeline_.indirect_light(*g);
+  return {std::move(g), std::move(indirect)};
 }
 
 FrameSource::Result FrameSource::window(int frame) {

@@ -245,12 +245,21 @@ int pyramid_level(int scale) {
 }  // namespace
 
 Pipeline::TracedLight Pipeline::trace_light(const GBuffer& g) const {
+  TracedLight out = trace_undenoised(g);
+  const int level = pyramid_level(impl_->plan.trace_scale);
+  if (impl_->plan.denoise)
+    out.light = detail::upsample_and_denoise(out.light, level, g.depth, g.normal,
+                                             impl_->settings.denoise_settings, true, level);
+  return out;
+}
+
+Pipeline::TracedLight Pipeline::trace_undenoised(const GBuffer& g) const {
   const GiSettings& s = impl_->settings;
   const Plan& plan = impl_->plan;
   const Image reflected = detail::reflected_radiance(g, plan.gather_emission);
   const double closure = detail::closure_weight(g, s.miss);
-  const detail::TraceGrid grid =
-      detail::make_trace_grid(g, reflected, plan.trace_scale, static_cast<float>(s.thickness));
+  const detail::TraceGrid grid = detail::make_trace_grid(g, reflected, plan.trace_scale,
+                                                         static_cast<float>(s.thickness));
   detail::WeightedHits hits;
   switch (s.tracer) {
     case Tracer::kReference:
@@ -265,11 +274,6 @@ Pipeline::TracedLight Pipeline::trace_light(const GBuffer& g) const {
   }
   TracedLight out;
   out.light = detail::gather_bounces(grid, hits, s.bounces, closure);
-  hits = {};
-  const int level = pyramid_level(plan.trace_scale);
-  if (plan.denoise)
-    out.light = detail::upsample_and_denoise(out.light, level, g.depth, g.normal,
-                                             s.denoise_settings, true, level);
   out.grid = grid_gbuffer(g, grid);
   return out;
 }
@@ -282,7 +286,16 @@ Image Pipeline::finish_light(const GBuffer& g, const Image& grid_light) const {
 }
 
 Image Pipeline::indirect_light(const GBuffer& g) const {
-  return finish_light(g, trace_light(g).light);
+  // Without a temporal stage in between, one pass of the pyramid filters and upsamples (its
+  // guides are built once): finish_light(trace_light(g)) but for the 1e-3 own-value fallback
+  // of pixels no coarse sample resembles, which takes the traced light here, the filtered one
+  // there.
+  const Plan& plan = impl_->plan;
+  const int level = pyramid_level(plan.trace_scale);
+  Image light = trace_undenoised(g).light;
+  if (level == 0 && !plan.denoise) return light;
+  return detail::upsample_and_denoise(light, level, g.depth, g.normal,
+                                      impl_->settings.denoise_settings, plan.denoise);
 }
 
 FrameResult Pipeline::composite(const GBuffer& g, Image indirect) const {
