@@ -53,20 +53,6 @@ void validate(const GiSettings& s) {
   detail::validate_denoise_settings(s.denoise_settings);
 }
 
-const char* miss_mode_name(MissMode mode) {
-  switch (mode) {
-    case MissMode::kEnvironment:
-      return "env";
-    case MissMode::kFrame:
-      return "frame";
-    case MissMode::kExtend:
-      return "extend";
-    case MissMode::kAuto:
-      return "auto";
-  }
-  return "?";
-}
-
 }  // namespace
 
 Plan make_plan(const SequenceInfo& seq, const GiSettings& s) {
@@ -187,6 +173,10 @@ struct Pipeline::Impl {
   GiSettings settings;
   Plan plan;
   detail::Environment env;
+
+  // Tracing, misses and bounces on the trace grid: the light before the denoiser, and, when
+  // `grid_out` is given, the grid as a G-buffer for the temporal stage.
+  Image trace(const GBuffer& g, GBuffer* grid_out) const;
 };
 
 Pipeline::Pipeline(const SequenceInfo& seq, const GiSettings& settings)
@@ -244,37 +234,35 @@ int pyramid_level(int scale) {
 
 }  // namespace
 
+Image Pipeline::Impl::trace(const GBuffer& g, GBuffer* grid_out) const {
+  const GiSettings& s = settings;
+  const Image reflected = detail::reflected_radiance(g, plan.gather_emission);
+  const double closure = detail::closure_weight(g, s.miss);
+  const detail::TraceGrid grid =
+      detail::make_trace_grid(g, reflected, plan.trace_scale, static_cast<float>(s.thickness));
+  detail::WeightedHits hits;
+  switch (s.tracer) {
+    case Tracer::kReference:
+      hits = detail::weighted_from_rays(grid, detail::trace_reference(g, s, env));
+      break;
+    case Tracer::kScreenSpace:
+      hits = detail::weighted_from_rays(grid, detail::march_screen_space(g, s, env));
+      break;
+    case Tracer::kSlices:
+      hits = detail::trace_slices(g, grid, s, env);
+      break;
+  }
+  if (grid_out) *grid_out = grid_gbuffer(g, grid);
+  return detail::gather_bounces(grid, hits, s.bounces, closure);
+}
+
 Pipeline::TracedLight Pipeline::trace_light(const GBuffer& g) const {
-  TracedLight out = trace_undenoised(g);
+  TracedLight out;
+  out.light = impl_->trace(g, &out.grid);
   const int level = pyramid_level(impl_->plan.trace_scale);
   if (impl_->plan.denoise)
     out.light = detail::upsample_and_denoise(out.light, level, g.depth, g.normal,
                                              impl_->settings.denoise_settings, true, level);
-  return out;
-}
-
-Pipeline::TracedLight Pipeline::trace_undenoised(const GBuffer& g) const {
-  const GiSettings& s = impl_->settings;
-  const Plan& plan = impl_->plan;
-  const Image reflected = detail::reflected_radiance(g, plan.gather_emission);
-  const double closure = detail::closure_weight(g, s.miss);
-  const detail::TraceGrid grid = detail::make_trace_grid(g, reflected, plan.trace_scale,
-                                                         static_cast<float>(s.thickness));
-  detail::WeightedHits hits;
-  switch (s.tracer) {
-    case Tracer::kReference:
-      hits = detail::weighted_from_rays(grid, detail::trace_reference(g, s, impl_->env));
-      break;
-    case Tracer::kScreenSpace:
-      hits = detail::weighted_from_rays(grid, detail::march_screen_space(g, s, impl_->env));
-      break;
-    case Tracer::kSlices:
-      hits = detail::trace_slices(g, grid, s, impl_->env);
-      break;
-  }
-  TracedLight out;
-  out.light = detail::gather_bounces(grid, hits, s.bounces, closure);
-  out.grid = grid_gbuffer(g, grid);
   return out;
 }
 
@@ -292,7 +280,7 @@ Image Pipeline::indirect_light(const GBuffer& g) const {
   // there.
   const Plan& plan = impl_->plan;
   const int level = pyramid_level(plan.trace_scale);
-  Image light = trace_undenoised(g).light;
+  Image light = impl_->trace(g, nullptr);
   if (level == 0 && !plan.denoise) return light;
   return detail::upsample_and_denoise(light, level, g.depth, g.normal,
                                       impl_->settings.denoise_settings, plan.denoise);

@@ -33,8 +33,17 @@ const char* tracer_name(Tracer t) {
   return "?";
 }
 
-const char* miss_name(MissMode m) {
-  switch (m) {
+template <typename T>
+std::string text(const T& v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+}  // namespace
+
+const char* miss_mode_name(MissMode mode) {
+  switch (mode) {
     case MissMode::kEnvironment:
       return "env";
     case MissMode::kFrame:
@@ -46,15 +55,6 @@ const char* miss_name(MissMode m) {
   }
   return "?";
 }
-
-template <typename T>
-std::string text(const T& v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
-
-}  // namespace
 
 void apply_preset(const std::string& name, GiSettings* s) {
   for (const PresetRow& row : kPresets) {
@@ -93,7 +93,7 @@ std::vector<std::pair<std::string, std::string>> describe_settings(const GiSetti
   out.emplace_back("bounces", text(s.bounces));
   out.emplace_back("thickness", text(s.thickness));
   out.emplace_back("max-distance", text(s.max_distance));
-  out.emplace_back("miss", miss_name(s.miss));
+  out.emplace_back("miss", miss_mode_name(s.miss));
   out.emplace_back("env", s.env_map.empty() ? text(s.env_color[0]) + "," + text(s.env_color[1]) +
                                                   "," + text(s.env_color[2])
                                             : s.env_map);

@@ -66,8 +66,6 @@ class Pipeline {
   FrameResult composite(const GBuffer& frame, Image indirect) const;
 
  private:
-  // Tracing, misses and bounces: trace_light before its denoise.
-  TracedLight trace_undenoised(const GBuffer& frame) const;
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

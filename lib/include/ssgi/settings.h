@@ -96,6 +96,9 @@ void apply_preset(const std::string& name, GiSettings* settings);
 // The names of the presets, in order of cost.
 const std::vector<std::string>& preset_names();
 
+// The --miss spelling of a miss mode ("auto", "env", "frame", "extend").
+const char* miss_mode_name(MissMode mode);
+
 // Every setting that decides the result, as (name, value) pairs named as the options are,
 // for `ssgi info`, --stats and the output's provenance.
 std::vector<std::pair<std::string, std::string>> describe_settings(const GiSettings& settings);

@@ -67,11 +67,7 @@ void RangeWeightsSimd(const RangeBatch& b, const RangeTerms& terms, float* out) 
                        hn::IfThenZeroElse(hn::And(p_normal, q_normal), w));
     hn::StoreU(hn::IfThenElseZero(valid, w), d, out + k);
   }
-  for (; k < n; ++k) {
-    const Surface p{b.pz[k], b.pnx[k], b.pny[k], b.pnz[k], b.pgx[k], b.pgy[k]};
-    const Surface q{b.qz[k], b.qnx[k], b.qny[k], b.qnz[k], 0, 0};
-    out[k] = range_weight(p, q, b.dx[k], b.dy[k], terms);
-  }
+  for (; k < n; ++k) out[k] = range_weight_at(b, k, terms);
 }
 
 }  // namespace HWY_NAMESPACE
@@ -94,11 +90,7 @@ bool simd_forced_scalar() {
 }
 
 void range_weights_scalar(const RangeBatch& b, const RangeTerms& terms, float* out) {
-  for (std::size_t k = 0; k < b.size(); ++k) {
-    const Surface p{b.pz[k], b.pnx[k], b.pny[k], b.pnz[k], b.pgx[k], b.pgy[k]};
-    const Surface q{b.qz[k], b.qnx[k], b.qny[k], b.qnz[k], 0, 0};
-    out[k] = range_weight(p, q, b.dx[k], b.dy[k], terms);
-  }
+  for (std::size_t k = 0; k < b.size(); ++k) out[k] = range_weight_at(b, k, terms);
 }
 
 void range_weights(const RangeBatch& b, const RangeTerms& terms, float* out) {

@@ -120,6 +120,13 @@ struct RangeBatch {
   std::size_t size_ = 0;
 };
 
+// range_weight of pair k of `batch`.
+inline float range_weight_at(const RangeBatch& b, std::size_t k, const RangeTerms& terms) {
+  const Surface p{b.pz[k], b.pnx[k], b.pny[k], b.pnz[k], b.pgx[k], b.pgy[k]};
+  const Surface q{b.qz[k], b.qnx[k], b.qny[k], b.qnz[k], 0, 0};
+  return range_weight(p, q, b.dx[k], b.dy[k], terms);
+}
+
 // out[k] = range_weight of pair k, for every pair of the batch: with the widest SIMD target
 // the CPU has (Highway's dynamic dispatch) unless SSGI_SIMD=scalar, or the power is not a
 // whole number (std::pow has no SIMD twin here).
