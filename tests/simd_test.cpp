@@ -7,6 +7,7 @@
 #include <cstring>
 #include <limits>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include "range_weights.h"
@@ -76,51 +77,122 @@ TEST(Simd, RangeWeightsMatchTheScalarTwinBitForBit) {
   }
 }
 
-TEST(Simd, SlabSectorCoordinatesMatchTheScalarTwinBitForBit) {
+// A random slice frame: origin, view vector, a direction t across it, the normal at gamma.
+SliceFrame random_frame(std::mt19937& rng, float oz) {
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  const float gamma = 1.5f * u(rng);
+  const float ox = u(rng), oy = u(rng);
+  const float len = std::sqrt(ox * ox + oy * oy + oz * oz);
+  const float vx = -ox / len, vy = -oy / len, vz = -oz / len;
+  float tx = vz, ty = 0, tz = -vx;  // any unit vector across v
+  const float tl = std::sqrt(tx * tx + tz * tz);
+  tx /= tl, tz /= tl;
+  const float cg = std::cos(gamma), sg = std::sin(gamma);
+  const float lo = gamma - 0.5f * kSlicePi, hi = gamma + 0.5f * kSlicePi;
+  // The slice's measure at the hemisphere's bounds (slices.cpp's SliceMeasure), so that the
+  // coordinates run over the 32 sectors.
+  auto measure = [&](float theta, float sn, float cs) {
+    const float g = 0.5f * (cg * sn * sn + sg * (theta - sn * cs));
+    return sn < 0 ? -g : g;
+  };
+  const float h_lo = measure(lo, -cg, sg), h_hi = measure(hi, cg, -sg);
+  return {ox,
+          oy,
+          oz,
+          vx,
+          vy,
+          vz,
+          tx,
+          ty,
+          tz,
+          1.1f,
+          cg,
+          sg,
+          lo,
+          hi,
+          h_lo,
+          32.0f / (h_hi - h_lo),
+          0.5f * (u(rng) + 1.0f)};
+}
+
+// A mesh of w x h texels: a tilted plane in front of the slices' origins with steps, holes
+// (background, no triangles), random triangle flags and random normals.
+std::vector<MeshTexel> random_mesh(std::mt19937& rng, int w, int h) {
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::uniform_int_distribution<int> pick(0, 15), normal(-127, 127);
+  std::vector<MeshTexel> texels(static_cast<std::size_t>(w) * h);
+  for (int j = 0; j < h; ++j)
+    for (int i = 0; i < w; ++i) {
+      MeshTexel& t = texels[static_cast<std::size_t>(j) * w + i];
+      float z = 4.0f + 0.05f * static_cast<float>(i) - 0.03f * static_cast<float>(j);
+      if (pick(rng) == 0) z *= 1.5f;  // a depth step
+      t.inverse_depth = pick(rng) == 1 ? 0.0f : 1.0f / z;
+      t.nx = static_cast<std::int8_t>(normal(rng));
+      t.ny = static_cast<std::int8_t>(normal(rng));
+      t.nz = static_cast<std::int8_t>(-std::abs(normal(rng)));
+      t.triangles = t.inverse_depth == 0 ? 0 : static_cast<std::uint8_t>(pick(rng) % 4);
+      if (pick(rng) < 10) t.triangles = kUpperTriangle | kLowerTriangle;
+    }
+  return texels;
+}
+
+TEST(Simd, MarchSideMatchesTheScalarTwinBitForBit) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-  for (int trial = 0; trial < 40; ++trial) {
-    // A slice frame: origin, view vector, a direction t across it, the normal at gamma.
-    const float gamma = 1.5f * u(rng);
-    const float ox = u(rng), oy = u(rng), oz = 3.0f + u(rng);
-    const float len = std::sqrt(ox * ox + oy * oy + oz * oz);
-    const float vx = -ox / len, vy = -oy / len, vz = -oz / len;
-    // t: any unit vector across v.
-    float tx = vz, ty = 0, tz = -vx;
-    const float tl = std::sqrt(tx * tx + tz * tz);
-    tx /= tl, tz /= tl;
-    const float cg = std::cos(gamma), sg = std::sin(gamma);
-    const SliceFrame f{ox,
-                       oy,
-                       oz,
-                       vx,
-                       vy,
-                       vz,
-                       tx,
-                       ty,
-                       tz,
-                       1.1f,
-                       cg,
-                       sg,
-                       gamma - 0.5f * kSlicePi,
-                       gamma + 0.5f * kSlicePi,
-                       -0.4f,
-                       20.0f,
-                       0.5f * (u(rng) + 1.0f)};
-    for (std::size_t n : {0u, 1u, 7u, 8u, 9u, 16u, 31u, 33u}) {
-      std::vector<float> x(n), y(n), z(n);
-      for (std::size_t k = 0; k < n; ++k) {
-        x[k] = 4.0f * u(rng), y[k] = 4.0f * u(rng), z[k] = 5.0f + 4.0f * u(rng);
-        if (k == 3) x[k] = ox, y[k] = oy, z[k] = oz;  // at the origin: a zero direction
+  std::size_t bits_set = 0, bridged = 0, samples = 0;
+  for (auto [w, h] :
+       {std::pair{37, 23}, std::pair{64, 64}, std::pair{1, 9}, std::pair{9, 1}, std::pair{2, 2}}) {
+    const std::vector<MeshTexel> texels = random_mesh(rng, w, h);
+    const MeshView mesh{texels.data(), w, h};
+    for (int trial = 0; trial < 60; ++trial) {
+      const SliceFrame f = random_frame(rng, 5.0f + u(rng));  // among the mesh's depths
+      const float angle = kSlicePi * u(rng);
+      SideMarch m{};
+      m.qx = 0.5f * static_cast<float>(w) * (1.0f + u(rng));
+      m.qy = 0.5f * static_cast<float>(h) * (1.0f + u(rng));
+      m.sx = std::cos(angle), m.sy = std::sin(angle);
+      m.t_max = 1.0f + static_cast<float>(std::max(w, h)) * (1.0f + u(rng));
+      m.u_step = 0.5f * (1.0f + u(rng));
+      m.cx = 0.5f * static_cast<float>(w), m.cy = 0.5f * static_cast<float>(h);
+      m.inv_fx = m.inv_fy = 1.0f / static_cast<float>(std::max(w, h));
+      m.thickness = 0.1f;
+      m.max_distance2 = trial % 3 == 0 ? 0.3f * (1.0f + u(rng)) : 0.0f;
+      for (int steps : {1, 7, 8, 9, 16, 28, 33}) {
+        m.steps = steps;
+        SideSamples simd, scalar;
+        const int n_simd = march_side(mesh, f, m, &simd);
+        const int n_scalar = march_side_scalar(mesh, f, m, &scalar);
+        ASSERT_EQ(n_simd, n_scalar) << w << "x" << h << " trial " << trial << " steps " << steps;
+        for (int j = 0; j < n_scalar; ++j) {
+          ASSERT_EQ(simd.pixel[j + 1], scalar.pixel[j + 1]) << trial << " " << steps << " " << j;
+          ASSERT_EQ(simd.bits[j], scalar.bits[j]) << trial << " " << steps << " " << j;
+          samples += scalar.pixel[j + 1] >= 0;
+          bits_set += scalar.bits[j] != 0;
+          // Consecutive samples: where the kernel decides whether to bridge.
+          if (j > 0 && scalar.pixel[j] >= 0 && scalar.pixel[j + 1] >= 0) ++bridged;
+        }
       }
-      std::vector<float> fs(n + 1, -7.0f), bs(n + 1, -7.0f), ft(n), bt(n);
-      slab_sector_coordinates(f, x.data(), y.data(), z.data(), n, fs.data(), bs.data());
-      slab_sector_coordinates_scalar(f, x.data(), y.data(), z.data(), n, ft.data(), bt.data());
-      ASSERT_EQ(std::memcmp(fs.data(), ft.data(), n * sizeof(float)), 0) << trial << " " << n;
-      ASSERT_EQ(std::memcmp(bs.data(), bt.data(), n * sizeof(float)), 0) << trial << " " << n;
-      EXPECT_EQ(fs[n], -7.0f);
     }
   }
+  // Not a trivial run: samples met the mesh, shadowed sectors, and followed each other.
+  EXPECT_GT(samples, 2000u);
+  EXPECT_GT(bits_set, 1000u);
+  EXPECT_GT(bridged, 500u);
+}
+
+TEST(Simd, SectorBitsAreTheSectorsInsideTheInterval) {
+  EXPECT_EQ(sector_bits(-0.5f, 0.5f), 1u);          // sector 0
+  EXPECT_EQ(sector_bits(0.5f, 3.0f), 0b1110u);      // 1, 2, 3
+  EXPECT_EQ(sector_bits(-10.0f, 40.0f), ~0u);       // all, clamped
+  EXPECT_EQ(sector_bits(30.2f, 31.0f), 1u << 31);   // the last
+  EXPECT_EQ(sector_bits(0.2f, 0.8f), 0u);           // between two sectors
+  EXPECT_EQ(sector_bits(3.0f, 2.0f), 0u);           // empty
+  EXPECT_EQ(sector_bits(31.5f, 40.0f), 0u);         // beyond the last
+  EXPECT_EQ(sector_bits(std::nanf(""), 4.0f), 0u);  // not a number
+  EXPECT_EQ(sector_bits(-1e30f, 1e30f), ~0u);
+}
+
+TEST(Simd, SectorCoordinatesSpanTheHemisphere) {
   // The coordinates span the hemisphere (here around the view vector): towards the camera is
   // its middle (half the measure), along t and against it its edges, and beyond them clamps.
   const SliceFrame f{

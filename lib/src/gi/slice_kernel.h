@@ -1,5 +1,5 @@
-// The slice tracer's arithmetic kernel: for a batch of sample points on one slice, where their
-// slabs' two ends fall among the slice's sectors (slices.h). The SIMD version does each point's
+// The slice tracer's kernel: one side of a slice marched over the trace grid's mesh, each
+// sample's slab turned into the sectors it shadows (slices.h). The SIMD version does each point's
 // arithmetic in the scalar twin's order (no fused multiply-add, the same polynomials), so the
 // two agree bit for bit on every target; SSGI_SIMD=scalar switches to the twin.
 #pragma once
@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
+#include <vector>
 
 namespace ssgi::detail {
 
@@ -59,13 +61,64 @@ inline float sector_coordinate(const SliceFrame& f, float wx, float wy, float wz
   return (m - f.h_lo) * f.to_sector - f.u_rot;
 }
 
-// For points (x[k], y[k], z[k]) (the fronts of slabs, camera space), the sector coordinates of
-// the front and of the back (the point scaled by back_scale). SIMD unless SSGI_SIMD=scalar.
-void slab_sector_coordinates(const SliceFrame& f, const float* x, const float* y, const float* z,
-                             std::size_t n, float* front, float* back);
+// The trace grid's mesh as the kernel reads it (surface_model.h's rules): a sample reads the
+// three corners of one triangle in two neighbouring rows, so each vertex is one 8-byte texel with
+// its inverse depth, its normal to 1/127 and the flags of the two triangles of the quad it is
+// the top-left corner of. Samples land far apart; fewer cache lines per sample is what makes
+// them fast.
+struct MeshTexel {
+  float inverse_depth;
+  std::int8_t nx, ny, nz;
+  std::uint8_t triangles;  // kUpperTriangle | kLowerTriangle
+};
+static_assert(sizeof(MeshTexel) == 8, "two 32-bit words, gathered as such");
+constexpr std::uint8_t kUpperTriangle = 1, kLowerTriangle = 2;
+
+struct MeshView {
+  const MeshTexel* texels;
+  int width, height;
+};
+
+// One side of a slice: steps samples at screen distances 1 + (t_max - 1) f^2 with f = (j +
+// u_step) / steps, from (qx, qy) along the unit direction (sx, sy), in trace-grid pixels; the
+// camera (cx, cy, 1/fx, 1/fy) in the same units; samples farther than sqrt(max_distance2) from
+// the origin end the side (0: no limit).
+struct SideMarch {
+  float qx, qy, sx, sy, t_max, u_step;
+  int steps;
+  float cx, cy, inv_fx, inv_fy, max_distance2, thickness;
+};
+
+// What march_side leaves per step j: bits[j], the sectors the sample's slab shadows together
+// with the strip to sample j - 1 when both lie on one continuous surface (0 where the side
+// meets no surface), and pixel[j + 1], the vertex whose light it brings (-1: none). The other
+// arrays are the kernel's own (index j + 1 for step j, index 0 standing for "no step before the
+// first"), padded to whole vectors.
+struct SideSamples {
+  std::vector<float> x, y, z, nx, ny, nz, front_u, back_u, distance2;
+  std::vector<std::int32_t> pixel;
+  std::vector<std::uint32_t> bits;
+  // Room for `steps` steps on any SIMD target.
+  void reserve(int steps);
+};
+
+// Marches one side of the slice `f` over the mesh: returns the number of steps to use (all of
+// them, or up to the first sample beyond the maximum distance) with out->bits and out->pixel
+// filled for those. SIMD unless SSGI_SIMD=scalar; every step's arithmetic is the scalar twin's,
+// in its order.
+int march_side(const MeshView& mesh, const SliceFrame& f, const SideMarch& m, SideSamples* out);
 
 // The scalar twin, for the tests.
-void slab_sector_coordinates_scalar(const SliceFrame& f, const float* x, const float* y,
-                                    const float* z, std::size_t n, float* front, float* back);
+int march_side_scalar(const MeshView& mesh, const SliceFrame& f, const SideMarch& m,
+                      SideSamples* out);
+
+// The sectors ceil(lo) .. floor(hi) of [lo, hi] as bits (0 when empty or not a number).
+inline std::uint32_t sector_bits(float lo, float hi) {
+  if (!(hi > lo)) return 0;
+  const float k0 = std::min(std::max(std::ceil(lo), 0.0f), 32.0f);
+  const float k1 = std::min(std::max(std::floor(hi), -1.0f), 31.0f);
+  if (!(k0 <= k1)) return 0;
+  return (~0u >> (31u - static_cast<std::uint32_t>(k1))) & (~0u << static_cast<std::uint32_t>(k0));
+}
 
 }  // namespace ssgi::detail

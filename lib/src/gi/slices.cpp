@@ -109,10 +109,7 @@ const SliceAzimuths& slice_azimuths() {
   return table;
 }
 
-// The trace grid's mesh (surface_model.h's rules) packed for the march along slices: a
-// sample reads the three corners of one triangle, two neighbouring rows, so each vertex is one
-// 8-byte texel holding its inverse depth, its normal to 1/127 and the flags of the quad's two
-// triangles. Samples land far apart; fewer cache lines per sample is what makes them fast.
+// The trace grid's mesh (surface_model.h's rules) in the kernel's texels.
 class PackedMesh {
  public:
   PackedMesh(const Image& depth, const Image& normal, const SurfaceModel& model)
@@ -121,7 +118,7 @@ class PackedMesh {
     for (int j = 0; j < height_; ++j)
       for (int i = 0; i < width_; ++i) {
         const std::size_t p = static_cast<std::size_t>(j) * width_ + i;
-        Texel& t = texels_[p];
+        MeshTexel& t = texels_[p];
         t.inverse_depth = 1.0f / depth.plane(0)[p];
         auto q = [](float v) {
           return static_cast<std::int8_t>(std::lround(std::clamp(v, -1.0f, 1.0f) * 127.0f));
@@ -129,82 +126,17 @@ class PackedMesh {
         t.nx = q(normal.plane(0)[p]);
         t.ny = q(normal.plane(1)[p]);
         t.nz = q(normal.plane(2)[p]);
-        t.triangles = static_cast<std::uint8_t>((mesh.has_triangle(i, j, true) ? kUpper : 0) |
-                                                (mesh.has_triangle(i, j, false) ? kLower : 0));
+        t.triangles =
+            static_cast<std::uint8_t>((mesh.has_triangle(i, j, true) ? kUpperTriangle : 0) |
+                                      (mesh.has_triangle(i, j, false) ? kLowerTriangle : 0));
       }
   }
 
-  struct Hit {
-    float z;
-    int pixel;  // the vertex whose light it brings (DepthMesh::heaviest_vertex's rule)
-    V3 normal;  // that vertex's, to 1/127
-  };
-
-  // DepthMesh::surface_at on the packed texels.
-  bool surface_at(float sx, float sy, Hit* out) const {
-    const float u = sx - 0.5f, v = sy - 0.5f;
-    const float fi = std::floor(u), fj = std::floor(v);
-    const int i = static_cast<int>(fi), j = static_cast<int>(fj);
-    if (i < 0 || j < 0 || i + 1 >= width_ || j + 1 >= height_) return false;
-    const float fu = u - fi, fv = v - fj;
-    const bool upper = fu >= fv;
-    const int a = j * width_ + i;
-    if (!(texels_[a].triangles & (upper ? kUpper : kLower))) return false;
-    const int b = upper ? a + 1 : a + width_, c = a + width_ + 1;
-    const float wa = upper ? 1.0f - fu : 1.0f - fv;
-    const float wb = upper ? fu - fv : fv - fu;
-    const float wc = upper ? fv : fu;
-    out->z = 1.0f / (wa * texels_[a].inverse_depth + wb * texels_[b].inverse_depth +
-                     wc * texels_[c].inverse_depth);
-    out->pixel = wa >= wb && wa >= wc ? a : wb >= wc ? b : c;
-    const Texel& t = texels_[out->pixel];
-    constexpr float k = 1.0f / 127.0f;
-    out->normal = {k * t.nx, k * t.ny, k * t.nz};
-    return true;
-  }
+  MeshView view() const { return {texels_.data(), width_, height_}; }
 
  private:
-  static constexpr std::uint8_t kUpper = 1, kLower = 2;
-  struct Texel {
-    float inverse_depth;
-    std::int8_t nx, ny, nz;
-    std::uint8_t triangles;
-  };
   int width_, height_;
-  std::vector<Texel> texels_;
-};
-
-// One side of a slice: the samples that met the mesh, in order (structure of arrays for the
-// kernel), with their sector coordinates once computed.
-struct SideSamples {
-  std::vector<int> step, pixel;
-  std::vector<float> x, y, z, depth, front_u, back_u;
-  std::vector<V3> normal;
-  std::size_t count = 0;
-  // Room for `most` samples, none taken; the coordinate arrays padded to whole vectors.
-  void reset(std::size_t most) {
-    if (step.size() < most) {
-      step.resize(most), pixel.resize(most), depth.resize(most), normal.resize(most);
-      x.resize(most + 16), y.resize(most + 16), z.resize(most + 16);
-      front_u.resize(most + 16), back_u.resize(most + 16);
-    }
-    count = 0;
-  }
-  void add(int j, const PackedMesh::Hit& hit, const V3& front) {
-    step[count] = j, pixel[count] = hit.pixel, depth[count] = hit.z, normal[count] = hit.normal;
-    x[count] = front.x, y[count] = front.y, z[count] = front.z;
-    ++count;
-  }
-  // The count rounded up to a multiple of 16, the padding copies of the last sample (or of the
-  // origin's neighbourhood when there is none), so that the kernel runs on whole vectors.
-  std::size_t padded() {
-    const std::size_t n = (count + 15) / 16 * 16;
-    for (std::size_t k = count; k < n; ++k) {
-      x[k] = count ? x[count - 1] : 0.0f, y[k] = count ? y[count - 1] : 0.0f,
-      z[k] = count ? z[count - 1] : 1.0f;
-    }
-    return n;
-  }
+  std::vector<MeshTexel> texels_;
 };
 
 SideSamples& scratch() {
@@ -219,6 +151,7 @@ struct SliceTracer {
   const Environment& env;
   SurfaceModel model;
   PackedMesh mesh;
+  MeshView mesh_view;
   int w, h;              // the frame's data window
   float fx, fy, cx, cy;  // the camera in trace-grid units
   float inv_fx, inv_fy;
@@ -231,6 +164,7 @@ struct SliceTracer {
         env(e),
         model{static_cast<float>(s.thickness)},
         mesh(gr.depth, gr.normal, model),
+        mesh_view(mesh.view()),
         w(gb.width()),
         h(gb.height()),
         fx(gr.fx),
@@ -320,15 +254,6 @@ struct SliceTracer {
                                   (kPi * static_cast<float>(kSectors) * static_cast<float>(slices));
       const float to_sector = static_cast<float>(kSectors) / h_total;
       total_weight += sector_weight * static_cast<float>(kSectors);
-      // Sectors ceil(a) .. floor(b) of sector coordinates a < b (see sector_coordinate).
-      auto sectors = [&](float a, float b) -> std::uint32_t {
-        if (!(b > a)) return 0;
-        const int k0 = std::max(0, static_cast<int>(std::ceil(a)));
-        const int k1 = std::min(kSectors - 1, static_cast<int>(std::floor(b)));
-        if (k1 < k0) return 0;
-        const std::uint32_t upto = k1 == 31 ? all : (1u << (k1 + 1)) - 1;
-        return upto & ~((1u << k0) - 1);
-      };
       const SliceFrame frame{
           origin.x,  origin.y, origin.z,     view.x,        view.y,
           view.z,    t.x,      t.y,          t.z,           1.0f + model.thickness,
@@ -347,51 +272,27 @@ struct SliceTracer {
         t_max *= 0.99999f;
         if (!(t_max > 1.0f)) continue;
         // The samples along the side that meet the mesh, quadratically spaced: dense near the
-        // origin (contact), sparse far away; up to the first beyond --max-distance.
-        const float inv_steps = 1.0f / static_cast<float>(steps);
-        SideSamples& side_samples = scratch();
-        side_samples.reset(static_cast<std::size_t>(steps));
-        for (int j = 0; j < steps; ++j) {
-          const float f = (static_cast<float>(j) + u_step) * inv_steps;
-          const float dist = 1.0f + (t_max - 1.0f) * f * f;
-          PackedMesh::Hit surface;
-          const float px = qx + sx * dist, py = qy + sy * dist;
-          if (!mesh.surface_at(px, py, &surface)) continue;
-          const V3 front = surface.z * ray(px, py);
-          if (max_distance > 0 && dot(front - origin, front - origin) > max_distance * max_distance)
-            break;
-          side_samples.add(j, surface, front);
-        }
-        const std::size_t count = side_samples.count;
-        slab_sector_coordinates(frame, side_samples.x.data(), side_samples.y.data(),
-                                side_samples.z.data(), side_samples.padded(),
-                                side_samples.front_u.data(), side_samples.back_u.data());
-        for (std::size_t k = 0; k < count && mask != all; ++k) {
-          const float fa = side_samples.front_u[k], fb = side_samples.back_u[k];
-          float lo = std::min(fa, fb), hi = std::max(fa, fb);
-          std::uint32_t bits = sectors(lo, hi);
-          // Between two consecutive samples of one continuous surface, the strip joining their
-          // slabs. Samples far apart on one plane (a floor seen at a grazing angle) differ in
-          // depth by more than a slab but are one surface: the mesh joins every pixel between.
-          if (k > 0 && side_samples.step[k - 1] + 1 == side_samples.step[k]) {
-            const V3 front{side_samples.x[k], side_samples.y[k], side_samples.z[k]};
-            const V3 prev_front{side_samples.x[k - 1], side_samples.y[k - 1],
-                                side_samples.z[k - 1]};
-            const V3& sn = side_samples.normal[k];
-            const V3& prev_n = side_samples.normal[k - 1];
-            const float z = side_samples.depth[k], prev_z = side_samples.depth[k - 1];
-            const bool coplanar =
-                dot(sn, prev_n) > 0.9f &&
-                std::fabs(dot(prev_n, front - prev_front)) <= model.thickness * std::min(prev_z, z);
-            if (coplanar || model.connected(prev_z, z)) {
-              lo = std::min(lo, std::min(side_samples.front_u[k - 1], side_samples.back_u[k - 1]));
-              hi = std::max(hi, std::max(side_samples.front_u[k - 1], side_samples.back_u[k - 1]));
-              bits |= sectors(lo, hi);
-            }
-          }
-          const std::uint32_t fresh = bits & ~mask;
+        // origin (contact), sparse far away; up to the first beyond --max-distance. A sector
+        // first shadowed by a sample is a ray that hits it first.
+        const SideMarch march{qx,
+                              qy,
+                              sx,
+                              sy,
+                              t_max,
+                              u_step,
+                              steps,
+                              cx,
+                              cy,
+                              inv_fx,
+                              inv_fy,
+                              max_distance * max_distance,
+                              model.thickness};
+        SideSamples& samples = scratch();
+        const int count = march_side(mesh_view, frame, march, &samples);
+        for (int j = 0; j < count && mask != all; ++j) {
+          const std::uint32_t fresh = samples.bits[j] & ~mask;
           if (fresh) {
-            pixels->push_back(side_samples.pixel[k]);
+            pixels->push_back(samples.pixel[j + 1]);
             weights->push_back(sector_weight * static_cast<float>(__builtin_popcount(fresh)));
             mask |= fresh;
           }
