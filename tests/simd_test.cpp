@@ -72,9 +72,71 @@ TEST(Simd, RangeWeightsMatchTheScalarTwinBitForBit) {
       EXPECT_EQ(simd[n], -1.0f);  // nothing written past the batch
       std::size_t positive = 0;
       for (std::size_t k = 0; k < n; ++k) positive += scalar[k] > 0.5f;
-      if (n >= 8 && power == 32.0f) EXPECT_GT(positive, 0u) << n;  // not a trivial batch
+      if (n >= 8 && power == 32.0f) {
+        EXPECT_GT(positive, 0u) << n;  // not a trivial batch
+      }
     }
   }
+}
+
+// Guide planes of w x h random surfaces (random_surface's rare values included).
+struct RandomGuides {
+  std::vector<float> z, nx, ny, nz, gx, gy;
+  int width, height;
+  RandomGuides(std::mt19937& rng, int w, int h) : width(w), height(h) {
+    for (int k = 0; k < w * h; ++k) {
+      const Surface s = random_surface(rng);
+      z.push_back(s.z), nx.push_back(s.nx), ny.push_back(s.ny), nz.push_back(s.nz);
+      gx.push_back(s.gx), gy.push_back(s.gy);
+    }
+  }
+  GuidePlanes planes() const {
+    return {z.data(), nx.data(), ny.data(), nz.data(), gx.data(), gy.data(), width, height};
+  }
+};
+
+TEST(Simd, UpsampleRowMatchesTheScalarTwinBitForBit) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(0.0f, 4.0f);
+  std::size_t blended = 0;
+  for (auto [w, h] : {std::pair{1, 1}, std::pair{2, 3}, std::pair{7, 5}, std::pair{17, 9},
+                      std::pair{40, 6}, std::pair{33, 1}}) {
+    const RandomGuides fine(rng, w, h), coarse(rng, (w + 1) / 2, (h + 1) / 2);
+    std::vector<float> light(3 * coarse.z.size()), own(3 * static_cast<std::size_t>(w));
+    for (float& v : light) v = u(rng);
+    for (float& v : own) v = u(rng);
+    const std::size_t cn = coarse.z.size();
+    const float* const coarse_light[3] = {light.data(), light.data() + cn, light.data() + 2 * cn};
+    const float* const own_at[3] = {own.data(), own.data() + w, own.data() + 2 * w};
+    for (float power : {32.0f, 1.0f, 0.0f}) {
+      DenoiseSettings settings;
+      settings.normal_power = power;
+      const RangeTerms terms = make_range_terms(settings);
+      for (int y = 0; y < h; ++y) {
+        std::vector<float> simd(3 * w + 1, -1.0f), scalar(3 * w, -2.0f);
+        float* const simd_at[3] = {simd.data(), simd.data() + w, simd.data() + 2 * w};
+        float* const scalar_at[3] = {scalar.data(), scalar.data() + w, scalar.data() + 2 * w};
+        upsample_row(fine.planes(), y, coarse.planes(), coarse_light, own_at, terms, simd_at);
+        upsample_row_scalar(fine.planes(), y, coarse.planes(), coarse_light, own_at, terms,
+                            scalar_at);
+        ASSERT_EQ(std::memcmp(simd.data(), scalar.data(), 3 * w * sizeof(float)), 0)
+            << w << "x" << h << " row " << y << " power " << power;
+        EXPECT_EQ(simd[3 * w], -1.0f);  // nothing written past the row
+        for (int c = 0; c < 3; ++c)
+          for (int x = 0; x < w; ++x) {
+            const float v = scalar[c * w + x];
+            if (!is_surface(fine.z[static_cast<std::size_t>(y) * w + x])) {
+              EXPECT_EQ(v, 0.0f);
+              continue;
+            }
+            EXPECT_GE(v, 0.0f);
+            EXPECT_LE(v, 4.0f);
+            blended += std::fabs(v - own_at[c][x]) > 1e-3f;
+          }
+      }
+    }
+  }
+  EXPECT_GT(blended, 300u);  // the coarse light came through, not only the pixels' own
 }
 
 // A random slice frame: origin, view vector, a direction t across it, the normal at gamma.

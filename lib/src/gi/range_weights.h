@@ -135,6 +135,75 @@ void range_weights(const RangeBatch& batch, const RangeTerms& terms, float* out)
 // The scalar twin of range_weights, for the tests.
 void range_weights_scalar(const RangeBatch& batch, const RangeTerms& terms, float* out);
 
+// A pyramid level's guides as planes (Surface's fields, one plane each), width x height.
+struct GuidePlanes {
+  const float *z, *nx, *ny, *nz, *gx, *gy;
+  int width, height;
+  Surface at(std::size_t i) const { return {z[i], nx[i], ny[i], nz[i], gx[i], gy[i]}; }
+};
+
+// Weight of a fine pixel's own value in bilateral upsampling. A pixel that no coarse sample
+// resembles (a feature thinner than a coarse pixel) keeps its own light instead of taking a
+// neighbouring surface's. A constant blend rather than a threshold keeps neighbouring pixels
+// from switching abruptly; where the coarse samples do match, it lets in 1e-3 of the noise.
+constexpr float kOwnValueWeight = 1e-3f;
+
+// Fine pixel (x, y) of upsample_row below.
+inline void upsample_pixel(const GuidePlanes& fine, int x, int y, const GuidePlanes& coarse,
+                           const float* const coarse_light[3], const float* const own[3],
+                           const RangeTerms& terms, float* const out[3]) {
+  const std::size_t i = static_cast<std::size_t>(y) * fine.width + x;
+  if (!is_surface(fine.z[i])) {
+    for (int c = 0; c < 3; ++c) out[c][x] = 0.0f;
+    return;
+  }
+  const Surface p = fine.at(i);
+  // A fine pixel centre lies at coarse coordinate x/2 - 1/4: its two coarse samples along an
+  // axis and the second's bilinear weight.
+  const int first_x = x % 2 == 0 ? x / 2 - 1 : x / 2, first_y = y % 2 == 0 ? y / 2 - 1 : y / 2;
+  const float second_wx = x % 2 == 0 ? 0.75f : 0.25f, second_wy = y % 2 == 0 ? 0.75f : 0.25f;
+  // The sums' range: float rounding must not take a mean outside the values it averages.
+  float sum = kOwnValueWeight, light[3], lo[3], hi[3];
+  for (int c = 0; c < 3; ++c) light[c] = sum * own[c][x], lo[c] = hi[c] = own[c][x];
+  for (int ky = 0; ky < 2; ++ky) {
+    const int cy = std::clamp(first_y + ky, 0, coarse.height - 1);
+    const float wy = ky ? second_wy : 1.0f - second_wy;
+    for (int kx = 0; kx < 2; ++kx) {
+      const int cx = std::clamp(first_x + kx, 0, coarse.width - 1);
+      const float wx = kx ? second_wx : 1.0f - second_wx;
+      const std::size_t j = static_cast<std::size_t>(cy) * coarse.width + cx;
+      // Coarse sample centres sit at fine coordinate 2c + 1/2; a background sample weighs 0
+      // (its infinite depth fails the depth test).
+      const float range = range_weight(p, coarse.at(j), static_cast<float>(2 * cx - x) + 0.5f,
+                                       static_cast<float>(2 * cy - y) + 0.5f, terms);
+      const float wq = (wx * wy) * range;
+      sum += wq;
+      for (int c = 0; c < 3; ++c) {
+        const float v = coarse_light[c][j];
+        light[c] += wq * v;
+        const float counted = wq > 0 ? v : own[c][x];
+        lo[c] = std::min(lo[c], counted), hi[c] = std::max(hi[c], counted);
+      }
+    }
+  }
+  for (int c = 0; c < 3; ++c) out[c][x] = std::min(std::max(light[c] / sum, lo[c]), hi[c]);
+}
+
+// Row y of joint bilateral upsampling (Kopf et al. 2007) from the level `coarse` (its light
+// `coarse_light`, 3 planes) to the next finer level `fine`: each fine pixel takes its 4 nearest
+// coarse samples with bilinear weights times their range_weight, plus kOwnValueWeight of its
+// own value own[c][x], clamped to the range of the values it averages; out[c][x] for x in
+// [0, fine.width), 0 where the fine pixel has no surface (own, and the coarse light where a
+// coarse sample has a surface, must be finite). SIMD on the same terms as range_weights.
+void upsample_row(const GuidePlanes& fine, int y, const GuidePlanes& coarse,
+                  const float* const coarse_light[3], const float* const own[3],
+                  const RangeTerms& terms, float* const out[3]);
+
+// The scalar twin of upsample_row, for the tests.
+void upsample_row_scalar(const GuidePlanes& fine, int y, const GuidePlanes& coarse,
+                         const float* const coarse_light[3], const float* const own[3],
+                         const RangeTerms& terms, float* const out[3]);
+
 // Whether SSGI_SIMD=scalar forces every kernel's scalar twin (read once).
 bool simd_forced_scalar();
 
