@@ -17,7 +17,7 @@
 #include "environment.h"
 #include "gather.h"
 #include "misses.h"
-#include "range_weights.h"
+#include "denoise_kernels.h"
 #include "slice_kernel.h"
 #include "slices.h"
 #include "ssgi/io.h"

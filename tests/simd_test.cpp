@@ -10,7 +10,7 @@
 #include <utility>
 #include <vector>
 
-#include "range_weights.h"
+#include "denoise_kernels.h"
 #include "slice_kernel.h"
 
 namespace ssgi::detail {
@@ -137,6 +137,41 @@ TEST(Simd, UpsampleRowMatchesTheScalarTwinBitForBit) {
     }
   }
   EXPECT_GT(blended, 300u);  // the coarse light came through, not only the pixels' own
+}
+
+TEST(Simd, DepthGradientRowMatchesTheScalarTwinBitForBit) {
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  std::size_t sloped = 0;
+  for (auto [w, h] : {std::pair{1, 1}, std::pair{3, 2}, std::pair{11, 7}, std::pair{13, 1},
+                      std::pair{1, 13}, std::pair{64, 9}}) {
+    // Planes with depth edges, ridges, background and depths far apart.
+    std::vector<float> z(static_cast<std::size_t>(w) * h);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        float v = 2.0f + 0.1f * static_cast<float>(x) - 0.05f * static_cast<float>(y);
+        const float r = u(rng);
+        if (r < 0.1f)
+          v = kInf;
+        else if (r < 0.2f)
+          v *= 3.0f;
+        else if (r < 0.25f)
+          v = 1e30f;
+        z[static_cast<std::size_t>(y) * w + x] = v;
+      }
+    for (int y = 0; y < h; ++y) {
+      std::vector<float> sx(w + 1, -1.0f), sy(w + 1, -1.0f), tx(w), ty(w);
+      depth_gradient_row(z.data(), w, h, y, sx.data(), sy.data());
+      depth_gradient_row_scalar(z.data(), w, h, y, tx.data(), ty.data());
+      ASSERT_EQ(std::memcmp(sx.data(), tx.data(), w * sizeof(float)), 0)
+          << w << "x" << h << " " << y;
+      ASSERT_EQ(std::memcmp(sy.data(), ty.data(), w * sizeof(float)), 0)
+          << w << "x" << h << " " << y;
+      EXPECT_EQ(sx[w], -1.0f);
+      for (int x = 0; x < w; ++x) sloped += std::fabs(tx[x] - 0.1f) < 1e-4f;
+    }
+  }
+  EXPECT_GT(sloped, 100u);  // the planes' own slope found along x
 }
 
 // A random slice frame: origin, view vector, a direction t across it, the normal at gamma.

@@ -17,8 +17,8 @@
 #include <string>
 #include <vector>
 
+#include "denoise_kernels.h"
 #include "parallel.h"
-#include "range_weights.h"
 #include "ssgi/error.h"
 
 namespace ssgi::detail {
@@ -52,46 +52,11 @@ struct Level {
   Guides guides;
 };
 
-// Of two one-sided depth differences, the smaller if they agree in sign (a plane, perhaps
-// with a depth edge on one side), else 0 (a ridge or a thin feature, not a plane). NaN when
-// either is missing.
-float agreeing_difference(float a, float b) {
-  if (!std::isfinite(a) || !std::isfinite(b)) return std::numeric_limits<float>::quiet_NaN();
-  if ((a < 0 && b > 0) || (a > 0 && b < 0)) return 0.0f;
-  return std::fabs(a) <= std::fabs(b) ? a : b;
-}
-
-// Depth change per pixel at z[0] along one axis. `z_at(k)` is the depth k pixels away, +inf
-// outside the image or on background. Prefers the differences on both sides of the pixel;
-// at image and silhouette borders, the two on the side that exists. 0 when nothing agrees,
-// which only makes the depth test stricter there.
-template <typename DepthAt>
-float axis_gradient(const DepthAt& z_at) {
-  const float z0 = z_at(0);
-  const float before = z0 - z_at(-1), after = z_at(1) - z0;
-  for (float g : {agreeing_difference(before, after), agreeing_difference(after, z_at(2) - z_at(1)),
-                  agreeing_difference(z_at(-1) - z_at(-2), before)}) {
-    if (!std::isnan(g)) return g;
-  }
-  return 0.0f;
-}
-
 void compute_depth_gradient(Guides& guides) {
-  const int w = guides.width, h = guides.height;
-  const float* depth = guides.z.data();
-  parallel_for_rows(h, [&](int y) {
-    for (int x = 0; x < w; ++x) {
-      const std::size_t i = static_cast<std::size_t>(y) * w + x;
-      if (!is_surface(depth[i])) continue;  // gradient stays 0
-      guides.gx[i] = axis_gradient([&](int k) {
-        const int xk = x + k;
-        return xk >= 0 && xk < w ? depth[i + k] : kInf;
-      });
-      guides.gy[i] = axis_gradient([&](int k) {
-        const int yk = y + k;
-        return yk >= 0 && yk < h ? depth[static_cast<std::size_t>(yk) * w + x] : kInf;
-      });
-    }
+  const std::size_t w = guides.width;
+  parallel_for_rows(guides.height, [&](int y) {
+    depth_gradient_row(guides.z.data(), guides.width, guides.height, y, guides.gx.data() + y * w,
+                       guides.gy.data() + y * w);
   });
 }
 

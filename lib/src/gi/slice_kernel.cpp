@@ -1,7 +1,7 @@
 // The slice tracer's kernel, compiled once per SIMD target (Highway's foreach_target).
 #include "slice_kernel.h"
 
-#include "range_weights.h"  // simd_forced_scalar
+#include "denoise_kernels.h"  // simd_forced_scalar
 
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "slice_kernel.cpp"

@@ -1,11 +1,11 @@
-// The range-weight kernel, compiled once per SIMD target (Highway's foreach_target).
-#include "range_weights.h"
+// The denoiser's kernels, compiled once per SIMD target (Highway's foreach_target).
+#include "denoise_kernels.h"
 
 #include <cstdlib>
 #include <string>
 
 #undef HWY_TARGET_INCLUDE
-#define HWY_TARGET_INCLUDE "range_weights.cpp"
+#define HWY_TARGET_INCLUDE "denoise_kernels.cpp"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
 #include <hwy/highway.h>
 
@@ -15,7 +15,7 @@ namespace detail {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
-// range_weight (range_weights.h) on lanes, operation for operation: the constants once per
+// range_weight (denoise_kernels.h) on lanes, operation for operation: the constants once per
 // call, the weight per vector of pairs.
 template <class D>
 struct RangeWeightV {
@@ -79,37 +79,92 @@ void RangeWeightsSimd(const RangeBatch& b, const RangeTerms& terms, float* out) 
   for (; k < n; ++k) out[k] = range_weight_at(b, k, terms);
 }
 
+// axis_gradient on lanes.
+template <class D, class V = hn::Vec<D>>
+V AxisGradient(D d, V before2, V before1, V z0, V after1, V after2) {
+  const V zero = hn::Zero(d);
+  auto agreeing = [&](V a, V b, auto* ok) {
+    *ok = hn::And(hn::IsFinite(a), hn::IsFinite(b));
+    const auto opposite = hn::Or(hn::And(hn::Lt(a, zero), hn::Gt(b, zero)),
+                                 hn::And(hn::Gt(a, zero), hn::Lt(b, zero)));
+    return hn::IfThenZeroElse(opposite, hn::IfThenElse(hn::Le(hn::Abs(a), hn::Abs(b)), a, b));
+  };
+  const V before = hn::Sub(z0, before1), after = hn::Sub(after1, z0);
+  hn::Mask<D> ok1, ok2, ok3;
+  const V g1 = agreeing(before, after, &ok1);
+  const V g2 = agreeing(after, hn::Sub(after2, after1), &ok2);
+  const V g3 = agreeing(hn::Sub(before1, before2), before, &ok3);
+  return hn::IfThenElse(ok1, g1, hn::IfThenElse(ok2, g2, hn::IfThenElseZero(ok3, g3)));
+}
+
+void DepthGradientRow(const float* z, int w, int h, int y, float* gx, float* gy) {
+  const hn::ScalableTag<float> d;
+  using V = hn::Vec<decltype(d)>;
+  const int lanes = static_cast<int>(hn::Lanes(d));
+  const V inf = hn::Set(d, kInf);
+  // The rows two above to two below, null outside the image.
+  const float* rows[5];
+  for (int k = -2; k <= 2; ++k)
+    rows[k + 2] = y + k >= 0 && y + k < h ? z + static_cast<std::size_t>(y + k) * w : nullptr;
+  const float* row = rows[2];
+  int x = 0;
+  for (; x < std::min(2, w); ++x) depth_gradient_pixel(z, w, h, x, y, gx, gy);
+  for (; x + lanes + 2 <= w; x += lanes) {
+    auto at = [&](int k) { return rows[k + 2] ? hn::LoadU(d, rows[k + 2] + x) : inf; };
+    const V z0 = hn::LoadU(d, row + x);
+    const auto surface = hn::Lt(z0, inf);
+    const V grad_x = AxisGradient(d, hn::LoadU(d, row + x - 2), hn::LoadU(d, row + x - 1), z0,
+                                  hn::LoadU(d, row + x + 1), hn::LoadU(d, row + x + 2));
+    const V grad_y = AxisGradient(d, at(-2), at(-1), z0, at(1), at(2));
+    hn::StoreU(hn::IfThenElseZero(surface, grad_x), d, gx + x);
+    hn::StoreU(hn::IfThenElseZero(surface, grad_y), d, gy + x);
+  }
+  for (; x < w; ++x) depth_gradient_pixel(z, w, h, x, y, gx, gy);
+}
+
 void UpsampleRowSimd(const GuidePlanes& fine, int y, const GuidePlanes& coarse,
                      const float* const coarse_light[3], const float* const own[3],
                      const RangeTerms& terms, float* const out[3]) {
   const hn::ScalableTag<float> d;
   const hn::RebindToSigned<decltype(d)> di;
   using VF = hn::Vec<decltype(d)>;
-  using VI = hn::Vec<decltype(di)>;
   const RangeWeightV<decltype(d)> weight(terms);
   const int w = fine.width, lanes = static_cast<int>(hn::Lanes(d));
   const std::size_t row = static_cast<std::size_t>(y) * w;
-  // Along y the row's two coarse rows and their weights (upsampling_taps in the scalar twin).
+  // Along y the row's two coarse rows and their weights (as in upsample_pixel).
   const int first_y = y % 2 == 0 ? y / 2 - 1 : y / 2;
   const float second_wy = y % 2 == 0 ? 0.75f : 0.25f;
   const int cy[2] = {std::clamp(first_y, 0, coarse.height - 1),
                      std::clamp(first_y + 1, 0, coarse.height - 1)};
   const float wy[2] = {1.0f - second_wy, second_wy};
-  const VI last_x = hn::Set(di, coarse.width - 1), one_i = hn::Set(di, 1);
-  const VF quarter = hn::Set(d, 0.25f), three_quarters = hn::Set(d, 0.75f), half = hn::Set(d, 0.5f);
+  // Lanes of fine pixels x0 .. x0 + lanes - 1 (x0 even) read the coarse columns x0/2 - 1 + k
+  // for k = (lane + 1) / 2 (the first tap) and one more (the second): one load of coarse
+  // columns from x0/2 - 1 and a permutation each, where all of those columns exist.
+  const auto first_tap =
+      hn::IndicesFromVec(d, hn::ShiftRight<1>(hn::Add(hn::Iota(di, 0), hn::Set(di, 1))));
+  const auto second_tap = hn::IndicesFromVec(
+      d, hn::Add(hn::ShiftRight<1>(hn::Add(hn::Iota(di, 0), hn::Set(di, 1))), hn::Set(di, 1)));
+  // The bilinear weights of the two taps alternate with the lanes (x0 even): 1/4 and 3/4 for
+  // even x, 3/4 and 1/4 for odd.
+  const auto odd =
+      hn::RebindMask(d, hn::Ne(hn::And(hn::Iota(di, 0), hn::Set(di, 1)), hn::Zero(di)));
+  const VF quarter = hn::Set(d, 0.25f), three_quarters = hn::Set(d, 0.75f);
+  const VF wx[2] = {hn::IfThenElse(odd, three_quarters, quarter),
+                    hn::IfThenElse(odd, quarter, three_quarters)};
+  // dx = (2 cx - x) + 1/2, 2 cx - x being -2 for even x and -1 for odd at the first tap, 2 more
+  // at the second.
+  const VF dx_first =
+      hn::Add(hn::ConvertTo(d, hn::Sub(hn::And(hn::Iota(di, 0), hn::Set(di, 1)), hn::Set(di, 2))),
+              hn::Set(d, 0.5f));
+  const VF dx[2] = {dx_first, hn::Add(dx_first, hn::Set(d, 2.0f))};
   int x0 = 0;
-  for (; x0 + lanes <= w; x0 += lanes) {
+  for (; x0 < std::min(2, w); ++x0)
+    upsample_pixel(fine, x0, y, coarse, coarse_light, own, terms, out);
+  for (; lanes >= 4 && x0 + lanes <= w && x0 / 2 - 1 + lanes <= coarse.width; x0 += lanes) {
     const std::size_t i = row + static_cast<std::size_t>(x0);
     const VF pz = hn::LoadU(d, fine.z + i), pnx = hn::LoadU(d, fine.nx + i),
              pny = hn::LoadU(d, fine.ny + i), pnz = hn::LoadU(d, fine.nz + i),
              pgx = hn::LoadU(d, fine.gx + i), pgy = hn::LoadU(d, fine.gy + i);
-    const VI x = hn::Add(hn::Iota(di, 0), hn::Set(di, x0));
-    const VI first_x = hn::ShiftRight<1>(hn::Sub(x, one_i));  // floor((x - 1) / 2)
-    const auto odd = hn::RebindMask(d, hn::Ne(hn::And(x, one_i), hn::Zero(di)));
-    const VF wx[2] = {hn::IfThenElse(odd, three_quarters, quarter),
-                      hn::IfThenElse(odd, quarter, three_quarters)};
-    const VI cx[2] = {hn::Min(hn::Max(first_x, hn::Zero(di)), last_x),
-                      hn::Min(hn::Max(hn::Add(first_x, one_i), hn::Zero(di)), last_x)};
     VF sum = hn::Set(d, kOwnValueWeight);
     VF light[3], own_light[3], lo[3], hi[3];
     for (int c = 0; c < 3; ++c) {
@@ -117,19 +172,22 @@ void UpsampleRowSimd(const GuidePlanes& fine, int y, const GuidePlanes& coarse,
       light[c] = hn::Mul(sum, own_light[c]);
     }
     for (int ky = 0; ky < 2; ++ky) {
-      const VI coarse_row = hn::Set(di, cy[ky] * coarse.width);
+      const std::size_t base = static_cast<std::size_t>(cy[ky]) * coarse.width + x0 / 2 - 1;
       const VF dy = hn::Set(d, static_cast<float>(2 * cy[ky] - y) + 0.5f);
+      const VF qz = hn::LoadU(d, coarse.z + base), qnx = hn::LoadU(d, coarse.nx + base),
+               qny = hn::LoadU(d, coarse.ny + base), qnz = hn::LoadU(d, coarse.nz + base);
+      VF ql[3];
+      for (int c = 0; c < 3; ++c) ql[c] = hn::LoadU(d, coarse_light[c] + base);
       for (int kx = 0; kx < 2; ++kx) {
-        const VI j = hn::Add(coarse_row, cx[kx]);
-        const VF dx = hn::Add(hn::ConvertTo(d, hn::Sub(hn::Add(cx[kx], cx[kx]), x)), half);
-        const VF range = weight(pz, pnx, pny, pnz, pgx, pgy, hn::GatherIndex(d, coarse.z, j),
-                                hn::GatherIndex(d, coarse.nx, j), hn::GatherIndex(d, coarse.ny, j),
-                                hn::GatherIndex(d, coarse.nz, j), dx, dy);
+        const auto& tap = kx ? second_tap : first_tap;
+        const VF range = weight(pz, pnx, pny, pnz, pgx, pgy, hn::TableLookupLanes(qz, tap),
+                                hn::TableLookupLanes(qnx, tap), hn::TableLookupLanes(qny, tap),
+                                hn::TableLookupLanes(qnz, tap), dx[kx], dy);
         const VF wq = hn::Mul(hn::Mul(wx[kx], hn::Set(d, wy[ky])), range);
         sum = hn::Add(sum, wq);
         const auto counts = hn::Gt(wq, hn::Zero(d));
         for (int c = 0; c < 3; ++c) {
-          const VF v = hn::GatherIndex(d, coarse_light[c], j);
+          const VF v = hn::TableLookupLanes(ql[c], tap);
           light[c] = hn::Add(light[c], hn::Mul(wq, v));
           const VF counted = hn::IfThenElse(counts, v, own_light[c]);
           lo[c] = hn::Min(lo[c], counted), hi[c] = hn::Max(hi[c], counted);
@@ -156,6 +214,7 @@ namespace detail {
 
 HWY_EXPORT(RangeWeightsSimd);
 HWY_EXPORT(UpsampleRowSimd);
+HWY_EXPORT(DepthGradientRow);
 
 bool simd_forced_scalar() {
   static const bool forced = [] {
@@ -167,6 +226,18 @@ bool simd_forced_scalar() {
 
 void range_weights_scalar(const RangeBatch& b, const RangeTerms& terms, float* out) {
   for (std::size_t k = 0; k < b.size(); ++k) out[k] = range_weight_at(b, k, terms);
+}
+
+void depth_gradient_row_scalar(const float* z, int w, int h, int y, float* gx, float* gy) {
+  for (int x = 0; x < w; ++x) depth_gradient_pixel(z, w, h, x, y, gx, gy);
+}
+
+void depth_gradient_row(const float* z, int w, int h, int y, float* gx, float* gy) {
+  if (simd_forced_scalar()) {
+    depth_gradient_row_scalar(z, w, h, y, gx, gy);
+    return;
+  }
+  HWY_DYNAMIC_DISPATCH(DepthGradientRow)(z, w, h, y, gx, gy);
 }
 
 void upsample_row_scalar(const GuidePlanes& fine, int y, const GuidePlanes& coarse,

@@ -1,7 +1,8 @@
-// The denoiser's range weight (how much a sample belongs to a pixel's surface) and its SIMD
-// kernel: a batch of pixel-sample pairs in, one weight each out. The kernel does each pair's
-// arithmetic in the scalar twin's order (no fused multiply-add, the same polynomial), so the
-// two agree bit for bit on every target, and SSGI_SIMD=scalar switches to the twin.
+// The denoiser's kernels: the range weight (how much a sample belongs to a pixel's surface) on
+// a batch of pixel-sample pairs, and a row at a time, the depth gradients of a level's guides
+// and joint bilateral upsampling. Each SIMD kernel does every pixel's arithmetic in its scalar
+// twin's order (no fused multiply-add, the same polynomials), so the two agree bit for bit on
+// every target, and SSGI_SIMD=scalar switches to the twins.
 #pragma once
 
 #include <algorithm>
@@ -134,6 +135,50 @@ void range_weights(const RangeBatch& batch, const RangeTerms& terms, float* out)
 
 // The scalar twin of range_weights, for the tests.
 void range_weights_scalar(const RangeBatch& batch, const RangeTerms& terms, float* out);
+
+// Of two one-sided depth differences, the smaller if they agree in sign (a plane, perhaps
+// with a depth edge on one side), else 0 (a ridge or a thin feature, not a plane). NaN when
+// either is missing.
+inline float agreeing_difference(float a, float b) {
+  if (!std::isfinite(a) || !std::isfinite(b)) return std::numeric_limits<float>::quiet_NaN();
+  if ((a < 0 && b > 0) || (a > 0 && b < 0)) return 0.0f;
+  return std::fabs(a) <= std::fabs(b) ? a : b;
+}
+
+// Depth change per pixel at z0 along one axis, from the depths one and two pixels before and
+// after it (+inf outside the image or on background). Prefers the differences on both sides
+// of the pixel; at image and silhouette borders, the two on the side that exists. 0 when
+// nothing agrees, which only makes the depth test stricter there.
+inline float axis_gradient(float before2, float before1, float z0, float after1, float after2) {
+  const float before = z0 - before1, after = after1 - z0;
+  for (float g : {agreeing_difference(before, after), agreeing_difference(after, after2 - after1),
+                  agreeing_difference(before1 - before2, before)}) {
+    if (!std::isnan(g)) return g;
+  }
+  return 0.0f;
+}
+
+// Row y of the depth gradients of the w x h depths z (+inf on background): gx[x] and gy[x] for
+// x in [0, w), 0 on background.
+void depth_gradient_row(const float* z, int w, int h, int y, float* gx, float* gy);
+
+// The scalar twin of depth_gradient_row, for the tests.
+void depth_gradient_row_scalar(const float* z, int w, int h, int y, float* gx, float* gy);
+
+// Pixel x of depth_gradient_row.
+inline void depth_gradient_pixel(const float* z, int w, int h, int x, int y, float* gx, float* gy) {
+  const std::size_t i = static_cast<std::size_t>(y) * w + x;
+  if (!(z[i] < kInf)) {
+    gx[x] = gy[x] = 0.0f;
+    return;
+  }
+  auto along_x = [&](int k) { return x + k >= 0 && x + k < w ? z[i + k] : kInf; };
+  auto along_y = [&](int k) {
+    return y + k >= 0 && y + k < h ? z[static_cast<std::size_t>(y + k) * w + x] : kInf;
+  };
+  gx[x] = axis_gradient(along_x(-2), along_x(-1), z[i], along_x(1), along_x(2));
+  gy[x] = axis_gradient(along_y(-2), along_y(-1), z[i], along_y(1), along_y(2));
+}
 
 // A pyramid level's guides as planes (Surface's fields, one plane each), width x height.
 struct GuidePlanes {
