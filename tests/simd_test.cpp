@@ -139,6 +139,62 @@ TEST(Simd, UpsampleRowMatchesTheScalarTwinBitForBit) {
   EXPECT_GT(blended, 300u);  // the coarse light came through, not only the pixels' own
 }
 
+TEST(Simd, DownsampleRowMatchesTheScalarTwinBitForBit) {
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<float> u(0.0f, 4.0f);
+  std::size_t mixed = 0;
+  for (auto [w, h] : {std::pair{1, 1}, std::pair{2, 2}, std::pair{7, 5}, std::pair{35, 9},
+                      std::pair{64, 4}, std::pair{33, 1}}) {
+    RandomGuides fine(rng, w, h);
+    // Neighbouring samples on one surface now and then, so that blocks blend.
+    for (std::size_t k = 1; k < fine.z.size(); k += 2)
+      if (rng() % 2) fine.z[k] = fine.z[k - 1], fine.nx[k] = fine.nx[k - 1];
+    std::vector<float> light(3 * fine.z.size());
+    for (float& v : light) v = u(rng);
+    const std::size_t n = fine.z.size();
+    const float* const fine_light[3] = {light.data(), light.data() + n, light.data() + 2 * n};
+    const float* const no_light[3] = {nullptr, nullptr, nullptr};
+    const int cw = (w + 1) / 2;
+    for (float power : {32.0f, 2.0f}) {
+      DenoiseSettings settings;
+      settings.normal_power = power;
+      const RangeTerms terms = make_range_terms(settings);
+      for (int y = 0; y < (h + 1) / 2; ++y) {
+        for (bool with_light : {true, false}) {
+          std::vector<float> a(7 * cw + 1, -1.0f), b(7 * cw, -2.0f);
+          auto row = [&](std::vector<float>& v) {
+            return GuideRow{v.data(), v.data() + cw, v.data() + 2 * cw, v.data() + 3 * cw};
+          };
+          float* const la[3] = {a.data() + 4 * cw, a.data() + 5 * cw, a.data() + 6 * cw};
+          float* const lb[3] = {b.data() + 4 * cw, b.data() + 5 * cw, b.data() + 6 * cw};
+          float* const none[3] = {nullptr, nullptr, nullptr};
+          downsample_row(fine.planes(), with_light ? fine_light : no_light, y, cw, terms, row(a),
+                         with_light ? la : none);
+          downsample_row_scalar(fine.planes(), with_light ? fine_light : no_light, y, cw, terms,
+                                row(b), with_light ? lb : none);
+          const std::size_t written = (with_light ? 7 : 4) * static_cast<std::size_t>(cw);
+          ASSERT_EQ(std::memcmp(a.data(), b.data(), written * sizeof(float)), 0)
+              << w << "x" << h << " row " << y << " light " << with_light;
+          EXPECT_EQ(a[7 * cw], -1.0f);
+          if (!with_light) continue;
+          for (int x = 0; x < cw; ++x) {
+            const float v = lb[0][x];
+            EXPECT_TRUE(v >= 0.0f && v <= 4.0f) << v;
+            // A blend of two or more samples, not one sample's value.
+            bool one_sample = false;
+            for (int k = 0; k < 4; ++k) {
+              const int fx = 2 * x + (k & 1), fy = 2 * y + (k >> 1);
+              if (fx < w && fy < h) one_sample |= v == fine_light[0][fy * w + fx];
+            }
+            mixed += !one_sample && is_surface(b[x]);
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(mixed, 50u);
+}
+
 TEST(Simd, DepthGradientRowMatchesTheScalarTwinBitForBit) {
   std::mt19937 rng(8);
   std::uniform_real_distribution<float> u(0.0f, 1.0f);

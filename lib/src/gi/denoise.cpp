@@ -101,93 +101,27 @@ Image light_on_surfaces(const Image& light, const Guides& guides) {
   return out;
 }
 
-// The index of the block sample that stands for the block: the one nearest the median depth,
-// so that the surface covering most of the block wins; on a tie the nearer one, since thin
-// foreground features are the first to vanish from a pyramid.
-int pick_representative(const float* depths, int count) {
-  std::array<float, 4> sorted{};
-  for (int s = 0; s < count; ++s) {  // insertion sort of at most 4
-    int k = s;
-    for (; k > 0 && sorted[k - 1] > depths[s]; --k) sorted[k] = sorted[k - 1];
-    sorted[k] = depths[s];
-  }
-  const float median =
-      count % 2 ? sorted[count / 2] : 0.5f * sorted[count / 2 - 1] + 0.5f * sorted[count / 2];
-  int best = 0;
-  for (int s = 1; s < count; ++s) {
-    const float d = std::fabs(depths[s] - median), best_d = std::fabs(depths[best] - median);
-    if (d < best_d || (d == best_d && depths[s] < depths[best])) best = s;
-  }
-  return best;
-}
-
-// Halves the level (rounding up): each 2x2 block becomes the weighted mean of its surface
-// samples, weighted by their resemblance to the block's representative, so that a block on an
-// edge keeps one surface instead of a blend of two. Depths are moved to the block centre along
-// the representative's gradient, which is where the upsampling and the filter place them. The
-// light is carried down when the fine level has any.
+// Halves the level (rounding up), block by block (downsample_row), carrying the light down when
+// the fine level has any; then the coarse level's depth gradients.
 Level downsample_with_guides(const Level& fine, const RangeTerms& terms) {
   const Guides& fg = fine.guides;
-  const int fw = fg.width, fh = fg.height;
-  const int w = (fw + 1) / 2, h = (fh + 1) / 2;
-  const bool with_light = fine.radiance.width() == fw && fine.radiance.height() == fh && fw > 0;
+  const int w = (fg.width + 1) / 2, h = (fg.height + 1) / 2;
+  const bool with_light =
+      fine.radiance.width() == fg.width && fine.radiance.height() == fg.height && fg.width > 0;
   Level coarse{with_light ? Image(w, h, 3) : Image(), Guides(w, h)};
   Guides& cg = coarse.guides;
+  const GuidePlanes fine_planes = fg.planes();
+  const float* const fine_light[3] = {with_light ? fine.radiance.plane(0) : nullptr,
+                                      with_light ? fine.radiance.plane(1) : nullptr,
+                                      with_light ? fine.radiance.plane(2) : nullptr};
   parallel_for_rows(h, [&](int y) {
-    for (int x = 0; x < w; ++x) {
-      const std::size_t i = static_cast<std::size_t>(y) * w + x;
-      std::array<float, 4> depths;
-      std::array<std::size_t, 4> index;
-      std::array<int, 4> sx, sy;
-      int count = 0;
-      for (int fy = 2 * y; fy < std::min(2 * y + 2, fh); ++fy) {
-        for (int fx = 2 * x; fx < std::min(2 * x + 2, fw); ++fx) {
-          const std::size_t j = static_cast<std::size_t>(fy) * fw + fx;
-          if (!is_surface(fg.z[j])) continue;
-          depths[count] = fg.z[j];
-          index[count] = j;
-          sx[count] = fx;
-          sy[count] = fy;
-          ++count;
-        }
-      }
-      if (count == 0) continue;  // background: z stays +inf
-      const int r = pick_representative(depths.data(), count);
-      const Surface rep = fg.at(index[r]);
-      const float centre_x = 2.0f * static_cast<float>(x) + 0.5f;
-      const float centre_y = 2.0f * static_cast<float>(y) + 0.5f;
-      float weight_sum = 0, z = 0, nx = 0, ny = 0, nz = 0;
-      std::array<double, 3> light{};  // double: a mean stays within the values it averages
-      for (int s = 0; s < count; ++s) {
-        const std::size_t j = index[s];
-        const float wq = s == r ? 1.0f
-                                : range_weight(rep, fg.at(j), static_cast<float>(sx[s] - sx[r]),
-                                               static_cast<float>(sy[s] - sy[r]), terms);
-        if (wq == 0) continue;
-        weight_sum += wq;
-        z += wq * (fg.z[j] + rep.gx * (centre_x - static_cast<float>(sx[s])) +
-                   rep.gy * (centre_y - static_cast<float>(sy[s])));
-        nx += wq * fg.nx[j];
-        ny += wq * fg.ny[j];
-        nz += wq * fg.nz[j];
-        if (with_light)
-          for (int c = 0; c < 3; ++c) light[c] += wq * fine.radiance.plane(c)[j];
-      }
-      // weight_sum >= 1, the representative's own weight.
-      z /= weight_sum;
-      // Moving a depth along a steep gradient could in theory take it behind the camera or
-      // beyond float range.
-      cg.z[i] = z > 0 && std::isfinite(z) ? z : rep.z;
-      const float length = std::sqrt(nx * nx + ny * ny + nz * nz);
-      if (length > 0 && std::isfinite(length)) {
-        cg.nx[i] = nx / length;
-        cg.ny[i] = ny / length;
-        cg.nz[i] = nz / length;
-      }
-      if (with_light)
-        for (int c = 0; c < 3; ++c)
-          coarse.radiance.plane(c)[i] = static_cast<float>(light[c] / weight_sum);
-    }
+    const std::size_t row = static_cast<std::size_t>(y) * w;
+    const GuideRow out{cg.z.data() + row, cg.nx.data() + row, cg.ny.data() + row,
+                       cg.nz.data() + row};
+    float* const light_out[3] = {with_light ? coarse.radiance.plane(0) + row : nullptr,
+                                 with_light ? coarse.radiance.plane(1) + row : nullptr,
+                                 with_light ? coarse.radiance.plane(2) + row : nullptr};
+    downsample_row(fine_planes, fine_light, y, w, terms, out, light_out);
   });
   compute_depth_gradient(cg);
   return coarse;

@@ -122,6 +122,139 @@ void DepthGradientRow(const float* z, int w, int h, int y, float* gx, float* gy)
   for (; x < w; ++x) depth_gradient_pixel(z, w, h, x, y, gx, gy);
 }
 
+void DownsampleRowSimd(const GuidePlanes& fine, const float* const fine_light[3], int y,
+                       int coarse_width, const RangeTerms& terms, const GuideRow& out,
+                       float* const light_out[3]) {
+  const hn::ScalableTag<float> d;
+  using VF = hn::Vec<decltype(d)>;
+  using M = hn::Mask<decltype(d)>;
+  const RangeWeightV<decltype(d)> weight(terms);
+  const int lanes = static_cast<int>(hn::Lanes(d));
+  const bool with_light = fine_light[0] != nullptr;
+  const VF inf = hn::Set(d, kInf), zero = hn::Zero(d), half = hn::Set(d, 0.5f);
+  const VF one = hn::Set(d, 1.0f);
+  // The block's two fine rows (the second missing below the last row).
+  const std::size_t rows[2] = {static_cast<std::size_t>(2 * y) * fine.width,
+                               static_cast<std::size_t>(2 * y + 1) * fine.width};
+  const bool second_row = 2 * y + 1 < fine.height;
+  const float centre_y = 2.0f * static_cast<float>(y) + 0.5f;
+  int x0 = 0;
+  // Whole vectors where every block has both its columns.
+  for (; x0 + lanes <= coarse_width && 2 * (x0 + lanes) <= fine.width; x0 += lanes) {
+    // Sample k of every lane's block: k & 1 its column, k >> 1 its row.
+    VF z[4], nx[4], ny[4], nz[4], gx[4], gy[4], light[3][4];
+    auto load = [&](const float* plane, VF* v, VF missing) {
+      for (int r = 0; r < 2; ++r) {
+        if (r == 1 && !second_row) {
+          v[2] = v[3] = missing;
+          continue;
+        }
+        hn::LoadInterleaved2(d, plane + rows[r] + 2 * x0, v[2 * r], v[2 * r + 1]);
+      }
+    };
+    load(fine.z, z, inf);
+    load(fine.nx, nx, zero), load(fine.ny, ny, zero), load(fine.nz, nz, zero);
+    load(fine.gx, gx, zero), load(fine.gy, gy, zero);
+    if (with_light)
+      for (int c = 0; c < 3; ++c) load(fine_light[c], light[c], zero);
+    M surface[4];
+    VF count = zero;
+    for (int k = 0; k < 4; ++k) {
+      surface[k] = hn::Lt(z[k], inf);
+      count = hn::Add(count, hn::IfThenElseZero(surface[k], one));
+    }
+    // The median of the surface depths (anything else sorts last as +inf).
+    VF zs[4];
+    for (int k = 0; k < 4; ++k) zs[k] = hn::IfThenElse(surface[k], z[k], inf);
+    VF s0 = hn::Min(zs[0], zs[1]), s1 = hn::Max(zs[0], zs[1]);
+    VF s2 = hn::Min(zs[2], zs[3]), s3 = hn::Max(zs[2], zs[3]);
+    VF t = hn::Min(s0, s2);
+    s2 = hn::Max(s0, s2), s0 = t;
+    t = hn::Min(s1, s3);
+    s3 = hn::Max(s1, s3), s1 = t;
+    t = hn::Min(s1, s2);
+    s2 = hn::Max(s1, s2), s1 = t;
+    const VF mean01 = hn::Add(hn::Mul(half, s0), hn::Mul(half, s1));
+    const VF mean12 = hn::Add(hn::Mul(half, s1), hn::Mul(half, s2));
+    const VF median =
+        hn::IfThenElse(hn::Eq(count, one), s0,
+                       hn::IfThenElse(hn::Eq(count, hn::Set(d, 2.0f)), mean01,
+                                      hn::IfThenElse(hn::Eq(count, hn::Set(d, 3.0f)), s1, mean12)));
+    // The representative, in the scalar twin's order.
+    M have = hn::FirstN(d, 0);
+    VF best_z = zero, best_d = zero, rz = zero, rnx = zero, rny = zero, rnz = zero, rgx = zero,
+       rgy = zero, r_index = zero;
+    for (int k = 0; k < 4; ++k) {
+      const VF dist = hn::Abs(hn::Sub(z[k], median));
+      const M better = hn::And(
+          surface[k],
+          hn::Or(hn::Not(have), hn::Or(hn::Lt(dist, best_d),
+                                       hn::And(hn::Eq(dist, best_d), hn::Lt(z[k], best_z)))));
+      best_z = hn::IfThenElse(better, z[k], best_z);
+      best_d = hn::IfThenElse(better, dist, best_d);
+      rz = hn::IfThenElse(better, z[k], rz);
+      rnx = hn::IfThenElse(better, nx[k], rnx);
+      rny = hn::IfThenElse(better, ny[k], rny);
+      rnz = hn::IfThenElse(better, nz[k], rnz);
+      rgx = hn::IfThenElse(better, gx[k], rgx);
+      rgy = hn::IfThenElse(better, gy[k], rgy);
+      r_index = hn::IfThenElse(better, hn::Set(d, static_cast<float>(k)), r_index);
+      have = hn::Or(have, surface[k]);
+    }
+    // The representative's column and row in its block.
+    const VF r_row = hn::IfThenElse(hn::Ge(r_index, hn::Set(d, 2.0f)), one, zero);
+    const VF r_column = hn::Sub(r_index, hn::Add(r_row, r_row));
+    const VF x_block =
+        hn::Mul(hn::Set(d, 2.0f), hn::Add(hn::Iota(d, 0.0f), hn::Set(d, static_cast<float>(x0))));
+    const VF centre_x = hn::Add(x_block, half);
+    VF weight_sum = zero, sz = zero, snx = zero, sny = zero, snz = zero;
+    VF sl[3] = {zero, zero, zero}, lo[3] = {inf, inf, inf}, hi[3];
+    for (int c = 0; c < 3; ++c) hi[c] = hn::Neg(inf);
+    for (int k = 0; k < 4; ++k) {
+      const float bx = static_cast<float>(k & 1), by = static_cast<float>(k >> 1);
+      const VF range = weight(rz, rnx, rny, rnz, rgx, rgy, z[k], nx[k], ny[k], nz[k],
+                              hn::Sub(hn::Set(d, bx), r_column), hn::Sub(hn::Set(d, by), r_row));
+      const VF wq = hn::IfThenElseZero(
+          surface[k],
+          hn::IfThenElse(hn::Eq(r_index, hn::Set(d, static_cast<float>(k))), one, range));
+      const M counts = hn::Gt(wq, zero);
+      weight_sum = hn::Add(weight_sum, wq);
+      const VF sx = hn::Add(x_block, hn::Set(d, bx));
+      const VF sy = hn::Set(d, static_cast<float>(2 * y) + by);
+      const VF moved = hn::Add(hn::Add(z[k], hn::Mul(rgx, hn::Sub(centre_x, sx))),
+                               hn::Mul(rgy, hn::Sub(hn::Set(d, centre_y), sy)));
+      sz = hn::Add(sz, hn::IfThenElseZero(counts, hn::Mul(wq, moved)));
+      snx = hn::Add(snx, hn::IfThenElseZero(counts, hn::Mul(wq, nx[k])));
+      sny = hn::Add(sny, hn::IfThenElseZero(counts, hn::Mul(wq, ny[k])));
+      snz = hn::Add(snz, hn::IfThenElseZero(counts, hn::Mul(wq, nz[k])));
+      if (with_light)
+        for (int c = 0; c < 3; ++c) {
+          const VF v = light[c][k];
+          sl[c] = hn::Add(sl[c], hn::IfThenElseZero(counts, hn::Mul(wq, v)));
+          lo[c] = hn::IfThenElse(counts, hn::Min(lo[c], v), lo[c]);
+          hi[c] = hn::IfThenElse(counts, hn::Max(hi[c], v), hi[c]);
+        }
+    }
+    const M any = hn::Gt(count, zero);
+    // Background lanes divide by 0 here; their results are replaced below.
+    const VF zm = hn::Div(sz, weight_sum);
+    const VF out_z = hn::IfThenElse(hn::And(hn::Gt(zm, zero), hn::Lt(zm, inf)), zm, rz);
+    hn::StoreU(hn::IfThenElse(any, out_z, inf), d, out.z + x0);
+    const VF length =
+        hn::Sqrt(hn::Add(hn::Add(hn::Mul(snx, snx), hn::Mul(sny, sny)), hn::Mul(snz, snz)));
+    const M normal = hn::And(any, hn::And(hn::Gt(length, zero), hn::Lt(length, inf)));
+    hn::StoreU(hn::IfThenElseZero(normal, hn::Div(snx, length)), d, out.nx + x0);
+    hn::StoreU(hn::IfThenElseZero(normal, hn::Div(sny, length)), d, out.ny + x0);
+    hn::StoreU(hn::IfThenElseZero(normal, hn::Div(snz, length)), d, out.nz + x0);
+    if (with_light)
+      for (int c = 0; c < 3; ++c)
+        hn::StoreU(
+            hn::IfThenElseZero(any, hn::Min(hn::Max(hn::Div(sl[c], weight_sum), lo[c]), hi[c])), d,
+            light_out[c] + x0);
+  }
+  for (; x0 < coarse_width; ++x0) downsample_pixel(fine, fine_light, x0, y, terms, out, light_out);
+}
+
 void UpsampleRowSimd(const GuidePlanes& fine, int y, const GuidePlanes& coarse,
                      const float* const coarse_light[3], const float* const own[3],
                      const RangeTerms& terms, float* const out[3]) {
@@ -215,6 +348,7 @@ namespace detail {
 HWY_EXPORT(RangeWeightsSimd);
 HWY_EXPORT(UpsampleRowSimd);
 HWY_EXPORT(DepthGradientRow);
+HWY_EXPORT(DownsampleRowSimd);
 
 bool simd_forced_scalar() {
   static const bool forced = [] {
@@ -238,6 +372,23 @@ void depth_gradient_row(const float* z, int w, int h, int y, float* gx, float* g
     return;
   }
   HWY_DYNAMIC_DISPATCH(DepthGradientRow)(z, w, h, y, gx, gy);
+}
+
+void downsample_row_scalar(const GuidePlanes& fine, const float* const fine_light[3], int y,
+                           int coarse_width, const RangeTerms& terms, const GuideRow& out,
+                           float* const light_out[3]) {
+  for (int x = 0; x < coarse_width; ++x)
+    downsample_pixel(fine, fine_light, x, y, terms, out, light_out);
+}
+
+void downsample_row(const GuidePlanes& fine, const float* const fine_light[3], int y,
+                    int coarse_width, const RangeTerms& terms, const GuideRow& out,
+                    float* const light_out[3]) {
+  if (simd_forced_scalar() || terms.integer_normal_power < 0) {
+    downsample_row_scalar(fine, fine_light, y, coarse_width, terms, out, light_out);
+    return;
+  }
+  HWY_DYNAMIC_DISPATCH(DownsampleRowSimd)(fine, fine_light, y, coarse_width, terms, out, light_out);
 }
 
 void upsample_row_scalar(const GuidePlanes& fine, int y, const GuidePlanes& coarse,

@@ -234,6 +234,106 @@ inline void upsample_pixel(const GuidePlanes& fine, int x, int y, const GuidePla
   for (int c = 0; c < 3; ++c) out[c][x] = std::min(std::max(light[c] / sum, lo[c]), hi[c]);
 }
 
+// A row of a coarser level's guides being written (no gradients: they follow from the depths).
+struct GuideRow {
+  float *z, *nx, *ny, *nz;
+};
+
+// Coarse pixel (x, y) of downsample_row below.
+inline void downsample_pixel(const GuidePlanes& fine, const float* const fine_light[3], int x,
+                             int y, const RangeTerms& terms, const GuideRow& out,
+                             float* const light_out[3]) {
+  // The block's surface samples in the order (2x, 2y), (2x+1, 2y), (2x, 2y+1), (2x+1, 2y+1).
+  std::size_t index[4];
+  int block[4];  // 0..3: bit 0 the sample's column in the block, bit 1 its row
+  float depths[4];
+  int count = 0;
+  for (int k = 0; k < 4; ++k) {
+    const int fx = 2 * x + (k & 1), fy = 2 * y + (k >> 1);
+    if (fx >= fine.width || fy >= fine.height) continue;
+    const std::size_t j = static_cast<std::size_t>(fy) * fine.width + fx;
+    if (!is_surface(fine.z[j])) continue;
+    index[count] = j, block[count] = k, depths[count] = fine.z[j];
+    ++count;
+  }
+  if (count == 0) {  // background
+    out.z[x] = kInf;
+    out.nx[x] = out.ny[x] = out.nz[x] = 0.0f;
+    if (light_out[0])
+      for (int c = 0; c < 3; ++c) light_out[c][x] = 0.0f;
+    return;
+  }
+  // The representative: the sample nearest the median depth, so that the surface covering most
+  // of the block wins; on a tie the nearer one, since thin foreground features are the first
+  // to vanish from a pyramid.
+  float sorted[4] = {kInf, kInf, kInf, kInf};
+  for (int s = 0; s < count; ++s) {  // insertion sort of at most 4
+    int k = s;
+    for (; k > 0 && sorted[k - 1] > depths[s]; --k) sorted[k] = sorted[k - 1];
+    sorted[k] = depths[s];
+  }
+  const float median =
+      count % 2 ? sorted[count / 2] : 0.5f * sorted[count / 2 - 1] + 0.5f * sorted[count / 2];
+  int r = 0;
+  for (int s = 1; s < count; ++s) {
+    const float d = std::fabs(depths[s] - median), best = std::fabs(depths[r] - median);
+    if (d < best || (d == best && depths[s] < depths[r])) r = s;
+  }
+  const Surface rep = fine.at(index[r]);
+  // The samples weighted by their resemblance to the representative; depths moved to the
+  // block centre (2x + 1/2, 2y + 1/2) along the representative's gradient.
+  const float centre_x = 2.0f * static_cast<float>(x) + 0.5f;
+  const float centre_y = 2.0f * static_cast<float>(y) + 0.5f;
+  float weight_sum = 0, z = 0, nx = 0, ny = 0, nz = 0, light[3] = {0, 0, 0};
+  float lo[3] = {kInf, kInf, kInf}, hi[3] = {-kInf, -kInf, -kInf};
+  for (int s = 0; s < count; ++s) {
+    const std::size_t j = index[s];
+    const int bx = block[s] & 1, by = block[s] >> 1, rx = block[r] & 1, ry = block[r] >> 1;
+    const float wq = s == r ? 1.0f
+                            : range_weight(rep, fine.at(j), static_cast<float>(bx - rx),
+                                           static_cast<float>(by - ry), terms);
+    if (!(wq > 0)) continue;
+    weight_sum += wq;
+    const float sx = static_cast<float>(2 * x + bx), sy = static_cast<float>(2 * y + by);
+    z += wq * (fine.z[j] + rep.gx * (centre_x - sx) + rep.gy * (centre_y - sy));
+    nx += wq * fine.nx[j];
+    ny += wq * fine.ny[j];
+    nz += wq * fine.nz[j];
+    if (fine_light[0])
+      for (int c = 0; c < 3; ++c) {
+        const float v = fine_light[c][j];
+        light[c] += wq * v;
+        lo[c] = std::min(lo[c], v), hi[c] = std::max(hi[c], v);
+      }
+  }
+  // weight_sum >= 1, the representative's own weight. Moving a depth along a steep gradient
+  // could in theory take it behind the camera or beyond float range.
+  z = z / weight_sum;
+  out.z[x] = z > 0 && z < kInf ? z : rep.z;
+  const float length = std::sqrt(nx * nx + ny * ny + nz * nz);
+  const bool normal = length > 0 && length < kInf;
+  out.nx[x] = normal ? nx / length : 0.0f;
+  out.ny[x] = normal ? ny / length : 0.0f;
+  out.nz[x] = normal ? nz / length : 0.0f;
+  if (light_out[0])
+    for (int c = 0; c < 3; ++c)
+      light_out[c][x] = std::min(std::max(light[c] / weight_sum, lo[c]), hi[c]);
+}
+
+// Row y of halving a level (rounding up): each 2x2 block of `fine` becomes the weighted mean
+// of its surface samples, weighted by their resemblance to the block's representative, so that
+// a block on an edge keeps one surface instead of a blend of two; its light, when fine_light[0]
+// is not null, likewise (clamped to the range of the values it averages). Writes x in [0,
+// coarse_width) of `out` (and light_out when there is light).
+void downsample_row(const GuidePlanes& fine, const float* const fine_light[3], int y,
+                    int coarse_width, const RangeTerms& terms, const GuideRow& out,
+                    float* const light_out[3]);
+
+// The scalar twin of downsample_row, for the tests.
+void downsample_row_scalar(const GuidePlanes& fine, const float* const fine_light[3], int y,
+                           int coarse_width, const RangeTerms& terms, const GuideRow& out,
+                           float* const light_out[3]);
+
 // Row y of joint bilateral upsampling (Kopf et al. 2007) from the level `coarse` (its light
 // `coarse_light`, 3 planes) to the next finer level `fine`: each fine pixel takes its 4 nearest
 // coarse samples with bilinear weights times their range_weight, plus kOwnValueWeight of its
