@@ -139,6 +139,47 @@ TEST(Simd, UpsampleRowMatchesTheScalarTwinBitForBit) {
   EXPECT_GT(blended, 300u);  // the coarse light came through, not only the pixels' own
 }
 
+TEST(Simd, JointBilateralRowMatchesTheScalarTwinBitForBit) {
+  std::mt19937 rng(6);
+  std::uniform_real_distribution<float> u(0.0f, 4.0f);
+  std::size_t blended = 0;
+  for (auto [w, h] :
+       {std::pair{1, 1}, std::pair{5, 3}, std::pair{19, 7}, std::pair{40, 5}, std::pair{26, 1}}) {
+    RandomGuides g(rng, w, h);
+    for (std::size_t k = 1; k < g.z.size(); ++k)  // runs of one surface, so that taps blend
+      if (rng() % 3) g.z[k] = g.z[k - 1], g.nx[k] = g.nx[k - 1], g.ny[k] = g.ny[k - 1];
+    const std::size_t n = g.z.size();
+    std::vector<float> light(3 * n);
+    for (float& v : light) v = u(rng);
+    const float* const planes[3] = {light.data(), light.data() + n, light.data() + 2 * n};
+    for (int radius : {0, 1, 2, 3}) {
+      std::vector<float> taps(radius + 1);
+      for (int k = 0; k <= radius; ++k) taps[k] = std::exp(-0.2f * static_cast<float>(k * k));
+      const RangeTerms terms = make_range_terms({});
+      for (int y = 0; y < h; ++y) {
+        std::vector<float> simd(3 * w + 1, -1.0f), scalar(3 * w, -2.0f);
+        float* const a[3] = {simd.data(), simd.data() + w, simd.data() + 2 * w};
+        float* const b[3] = {scalar.data(), scalar.data() + w, scalar.data() + 2 * w};
+        joint_bilateral_row(g.planes(), planes, y, radius, taps.data(), terms, a);
+        joint_bilateral_row_scalar(g.planes(), planes, y, radius, taps.data(), terms, b);
+        ASSERT_EQ(std::memcmp(simd.data(), scalar.data(), 3 * w * sizeof(float)), 0)
+            << w << "x" << h << " row " << y << " radius " << radius;
+        EXPECT_EQ(simd[3 * w], -1.0f);
+        for (int x = 0; x < w; ++x) {
+          const std::size_t i = static_cast<std::size_t>(y) * w + x;
+          if (!is_surface(g.z[i])) {
+            EXPECT_EQ(scalar[x], 0.0f);
+            continue;
+          }
+          EXPECT_TRUE(scalar[x] >= 0.0f && scalar[x] <= 4.0f) << scalar[x];
+          blended += std::fabs(scalar[x] - light[i]) > 1e-3f;
+        }
+      }
+    }
+  }
+  EXPECT_GT(blended, 200u);  // neighbours' light came in
+}
+
 TEST(Simd, DownsampleRowMatchesTheScalarTwinBitForBit) {
   std::mt19937 rng(4);
   std::uniform_real_distribution<float> u(0.0f, 4.0f);

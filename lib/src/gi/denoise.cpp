@@ -134,79 +134,20 @@ std::vector<float> gaussian_taps(int radius, float sigma) {
   return taps;
 }
 
-// One row's taps: the pairs for the range-weight kernel, and per tap its pixel and sample.
-struct RowTaps {
-  RangeBatch pairs;
-  std::vector<std::int32_t> pixel, sample;
-  std::vector<float> spatial, range;
-  std::size_t count = 0;
-  // Room for `most` taps, none taken.
-  void reserve(std::size_t most) {
-    pairs.resize(most);
-    if (pixel.size() < most) {
-      pixel.resize(most);
-      sample.resize(most);
-      spatial.resize(most);
-      range.resize(most);
-    }
-    count = 0;
-  }
-  void add(const Surface& p, const Surface& q, float dx, float dy, std::int32_t i, std::int32_t j,
-           float spatial_weight) {
-    pairs.set(count, p, q, dx, dy);
-    pixel[count] = i;
-    sample[count] = j;
-    spatial[count] = spatial_weight;
-    ++count;
-  }
-  // The range weights of every tap, by the SIMD kernel.
-  void weigh(const RangeTerms& terms) {
-    pairs.resize(count);
-    range_weights(pairs, terms, range.data());
-  }
-};
-
-// Joint bilateral filter of `radiance` guided by `guides`: a square window of `radius`, a
-// spatial Gaussian times `range_weight`. Used both at the coarsest level and as the blur
-// after each upsampling step.
+// Joint bilateral filter of `radiance` guided by `guides` (joint_bilateral_row): a square
+// window of `radius`, a spatial Gaussian times `range_weight`. Used both at the coarsest level
+// and as the blur after each upsampling step.
 Image joint_bilateral(const Image& radiance, const Guides& guides, int radius, float sigma_spatial,
                       const RangeTerms& terms) {
   const int w = radiance.width(), h = radiance.height();
   const std::vector<float> taps = gaussian_taps(radius, sigma_spatial);
   Image out(w, h, 3);
+  const GuidePlanes planes = guides.planes();
+  const float* const light[3] = {radiance.plane(0), radiance.plane(1), radiance.plane(2)};
   parallel_for_rows(h, [&](int y) {
-    thread_local RowTaps row;
-    row.reserve(static_cast<std::size_t>(w) * (2 * radius + 1) * (2 * radius + 1));
-    for (int x = 0; x < w; ++x) {
-      const std::size_t i = static_cast<std::size_t>(y) * w + x;
-      if (!is_surface(guides.z[i])) continue;
-      const Surface p = guides.at(i);
-      for (int qy = std::max(0, y - radius); qy <= std::min(h - 1, y + radius); ++qy) {
-        for (int qx = std::max(0, x - radius); qx <= std::min(w - 1, x + radius); ++qx) {
-          const std::size_t j = static_cast<std::size_t>(qy) * w + qx;
-          if (!is_surface(guides.z[j])) continue;
-          row.add(p, guides.at(j), static_cast<float>(qx - x), static_cast<float>(qy - y),
-                  static_cast<std::int32_t>(i), static_cast<std::int32_t>(j),
-                  taps[std::abs(qx - x)] * taps[std::abs(qy - y)]);
-        }
-      }
-    }
-    row.weigh(terms);
-    for (std::size_t k = 0; k < row.count;) {
-      const std::int32_t i = row.pixel[k];
-      double weight_sum = 0;  // double: a mean stays within the values it averages
-      std::array<double, 3> light{};
-      for (; k < row.count && row.pixel[k] == i; ++k) {
-        const std::int32_t j = row.sample[k];
-        // p itself counts fully, so that the sum below is never 0.
-        const float range = j == i ? 1.0f : row.range[k];
-        const float wq = row.spatial[k] * range;
-        if (wq == 0) continue;
-        weight_sum += wq;
-        for (int c = 0; c < 3; ++c) light[c] += wq * radiance.plane(c)[j];
-      }
-      for (int c = 0; c < 3; ++c) out.plane(c)[i] = static_cast<float>(light[c] / weight_sum);
-    }
+    const std::size_t row = static_cast<std::size_t>(y) * w;
+    float* const out_at[3] = {out.plane(0) + row, out.plane(1) + row, out.plane(2) + row};
+    joint_bilateral_row(planes, light, y, radius, taps.data(), terms, out_at);
   });
   return out;
 }

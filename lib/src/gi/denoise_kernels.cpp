@@ -31,10 +31,19 @@ struct RangeWeightV {
   explicit RangeWeightV(const RangeTerms& terms)
       : power(terms.integer_normal_power), inv_sigma(hn::Set(d, terms.inv_sigma_depth)) {}
 
+  // The depth test's factor of a pixel at depth pz: inv_sigma / pz.
+  V scale(V pz) const { return hn::Div(inv_sigma, pz); }
+
   V operator()(V pz, V pnx, V pny, V pnz, V pgx, V pgy, V qz, V qnx, V qny, V qnz, V dx,
                V dy) const {
+    return weigh(scale(pz), pz, pnx, pny, pnz, pgx, pgy, qz, qnx, qny, qnz, dx, dy);
+  }
+
+  // With the pixel's factor computed once (`scale`).
+  V weigh(V p_scale, V pz, V pnx, V pny, V pnz, V pgx, V pgy, V qz, V qnx, V qny, V qnz, V dx,
+          V dy) const {
     const V dz = hn::Sub(hn::Sub(hn::Sub(qz, pz), hn::Mul(pgx, dx)), hn::Mul(pgy, dy));
-    const V s = hn::Div(hn::Mul(dz, inv_sigma), pz);
+    const V s = hn::Mul(dz, p_scale);
     const V exponent = hn::Mul(hn::Mul(half, s), s);
     const auto valid = hn::Lt(exponent, max_exponent);
     // exp_negative
@@ -120,6 +129,58 @@ void DepthGradientRow(const float* z, int w, int h, int y, float* gx, float* gy)
     hn::StoreU(hn::IfThenElseZero(surface, grad_y), d, gy + x);
   }
   for (; x < w; ++x) depth_gradient_pixel(z, w, h, x, y, gx, gy);
+}
+
+void JointBilateralRowSimd(const GuidePlanes& g, const float* const light[3], int y, int radius,
+                           const float* taps, const RangeTerms& terms, float* const out[3]) {
+  const hn::ScalableTag<float> d;
+  using VF = hn::Vec<decltype(d)>;
+  const RangeWeightV<decltype(d)> weight(terms);
+  const int w = g.width, lanes = static_cast<int>(hn::Lanes(d));
+  const std::size_t row = static_cast<std::size_t>(y) * w;
+  const VF zero = hn::Zero(d), inf = hn::Set(d, kInf);
+  const int y0 = std::max(0, y - radius), y1 = std::min(g.height - 1, y + radius);
+  int x0 = 0;
+  for (; x0 < std::min(radius, w); ++x0)
+    joint_bilateral_pixel(g, light, x0, y, radius, taps, terms, out);
+  // Whole vectors whose windows lie inside the row.
+  for (; x0 + lanes + radius <= w; x0 += lanes) {
+    const std::size_t i = row + static_cast<std::size_t>(x0);
+    const VF pz = hn::LoadU(d, g.z + i), pnx = hn::LoadU(d, g.nx + i), pny = hn::LoadU(d, g.ny + i),
+             pnz = hn::LoadU(d, g.nz + i), pgx = hn::LoadU(d, g.gx + i),
+             pgy = hn::LoadU(d, g.gy + i);
+    const VF p_scale = weight.scale(pz);
+    VF weight_sum = zero, sum[3] = {zero, zero, zero}, lo[3] = {inf, inf, inf}, hi[3];
+    for (int c = 0; c < 3; ++c) hi[c] = hn::Neg(inf);
+    for (int qy = y0; qy <= y1; ++qy) {
+      for (int dx = -radius; dx <= radius; ++dx) {
+        const std::size_t j = static_cast<std::size_t>(qy) * w + x0 + dx;
+        const float spatial = taps[std::abs(dx)] * taps[std::abs(qy - y)];
+        const VF range =
+            qy == y && dx == 0
+                ? hn::Set(d, 1.0f)
+                : weight.weigh(p_scale, pz, pnx, pny, pnz, pgx, pgy, hn::LoadU(d, g.z + j),
+                               hn::LoadU(d, g.nx + j), hn::LoadU(d, g.ny + j),
+                               hn::LoadU(d, g.nz + j), hn::Set(d, static_cast<float>(dx)),
+                               hn::Set(d, static_cast<float>(qy - y)));
+        const VF wq = hn::Mul(hn::Set(d, spatial), range);
+        const auto counts = hn::Gt(wq, zero);
+        weight_sum = hn::Add(weight_sum, wq);
+        for (int c = 0; c < 3; ++c) {
+          const VF v = hn::LoadU(d, light[c] + j);
+          sum[c] = hn::Add(sum[c], hn::IfThenElseZero(counts, hn::Mul(wq, v)));
+          lo[c] = hn::IfThenElse(counts, hn::Min(lo[c], v), lo[c]);
+          hi[c] = hn::IfThenElse(counts, hn::Max(hi[c], v), hi[c]);
+        }
+      }
+    }
+    const auto surface = hn::Lt(pz, inf);
+    for (int c = 0; c < 3; ++c)
+      hn::StoreU(
+          hn::IfThenElseZero(surface, hn::Min(hn::Max(hn::Div(sum[c], weight_sum), lo[c]), hi[c])),
+          d, out[c] + x0);
+  }
+  for (; x0 < w; ++x0) joint_bilateral_pixel(g, light, x0, y, radius, taps, terms, out);
 }
 
 void DownsampleRowSimd(const GuidePlanes& fine, const float* const fine_light[3], int y,
@@ -210,10 +271,12 @@ void DownsampleRowSimd(const GuidePlanes& fine, const float* const fine_light[3]
     VF weight_sum = zero, sz = zero, snx = zero, sny = zero, snz = zero;
     VF sl[3] = {zero, zero, zero}, lo[3] = {inf, inf, inf}, hi[3];
     for (int c = 0; c < 3; ++c) hi[c] = hn::Neg(inf);
+    const VF r_scale = weight.scale(rz);
     for (int k = 0; k < 4; ++k) {
       const float bx = static_cast<float>(k & 1), by = static_cast<float>(k >> 1);
-      const VF range = weight(rz, rnx, rny, rnz, rgx, rgy, z[k], nx[k], ny[k], nz[k],
-                              hn::Sub(hn::Set(d, bx), r_column), hn::Sub(hn::Set(d, by), r_row));
+      const VF range =
+          weight.weigh(r_scale, rz, rnx, rny, rnz, rgx, rgy, z[k], nx[k], ny[k], nz[k],
+                       hn::Sub(hn::Set(d, bx), r_column), hn::Sub(hn::Set(d, by), r_row));
       const VF wq = hn::IfThenElseZero(
           surface[k],
           hn::IfThenElse(hn::Eq(r_index, hn::Set(d, static_cast<float>(k))), one, range));
@@ -298,40 +361,43 @@ void UpsampleRowSimd(const GuidePlanes& fine, int y, const GuidePlanes& coarse,
     const VF pz = hn::LoadU(d, fine.z + i), pnx = hn::LoadU(d, fine.nx + i),
              pny = hn::LoadU(d, fine.ny + i), pnz = hn::LoadU(d, fine.nz + i),
              pgx = hn::LoadU(d, fine.gx + i), pgy = hn::LoadU(d, fine.gy + i);
-    VF sum = hn::Set(d, kOwnValueWeight);
-    VF light[3], own_light[3], lo[3], hi[3];
-    for (int c = 0; c < 3; ++c) {
-      own_light[c] = lo[c] = hi[c] = hn::LoadU(d, own[c] + x0);
-      light[c] = hn::Mul(sum, own_light[c]);
-    }
+    const VF p_scale = weight.scale(pz);
+    // The four taps' weights first, then the light channel by channel (fewer live registers).
+    VF wq[4], sum = hn::Set(d, kOwnValueWeight);
+    std::size_t base[2];
     for (int ky = 0; ky < 2; ++ky) {
-      const std::size_t base = static_cast<std::size_t>(cy[ky]) * coarse.width + x0 / 2 - 1;
+      base[ky] = static_cast<std::size_t>(cy[ky]) * coarse.width + x0 / 2 - 1;
       const VF dy = hn::Set(d, static_cast<float>(2 * cy[ky] - y) + 0.5f);
-      const VF qz = hn::LoadU(d, coarse.z + base), qnx = hn::LoadU(d, coarse.nx + base),
-               qny = hn::LoadU(d, coarse.ny + base), qnz = hn::LoadU(d, coarse.nz + base);
-      VF ql[3];
-      for (int c = 0; c < 3; ++c) ql[c] = hn::LoadU(d, coarse_light[c] + base);
+      const VF qz = hn::LoadU(d, coarse.z + base[ky]), qnx = hn::LoadU(d, coarse.nx + base[ky]),
+               qny = hn::LoadU(d, coarse.ny + base[ky]), qnz = hn::LoadU(d, coarse.nz + base[ky]);
       for (int kx = 0; kx < 2; ++kx) {
         const auto& tap = kx ? second_tap : first_tap;
-        const VF range = weight(pz, pnx, pny, pnz, pgx, pgy, hn::TableLookupLanes(qz, tap),
-                                hn::TableLookupLanes(qnx, tap), hn::TableLookupLanes(qny, tap),
-                                hn::TableLookupLanes(qnz, tap), dx[kx], dy);
-        const VF wq = hn::Mul(hn::Mul(wx[kx], hn::Set(d, wy[ky])), range);
-        sum = hn::Add(sum, wq);
-        const auto counts = hn::Gt(wq, hn::Zero(d));
-        for (int c = 0; c < 3; ++c) {
-          const VF v = hn::TableLookupLanes(ql[c], tap);
-          light[c] = hn::Add(light[c], hn::Mul(wq, v));
-          const VF counted = hn::IfThenElse(counts, v, own_light[c]);
-          lo[c] = hn::Min(lo[c], counted), hi[c] = hn::Max(hi[c], counted);
-        }
+        const VF range =
+            weight.weigh(p_scale, pz, pnx, pny, pnz, pgx, pgy, hn::TableLookupLanes(qz, tap),
+                         hn::TableLookupLanes(qnx, tap), hn::TableLookupLanes(qny, tap),
+                         hn::TableLookupLanes(qnz, tap), dx[kx], dy);
+        VF& q = wq[2 * ky + kx];
+        q = hn::Mul(hn::Mul(wx[kx], hn::Set(d, wy[ky])), range);
+        sum = hn::Add(sum, q);
       }
     }
     const auto surface = hn::Lt(pz, hn::Set(d, kInf));
-    for (int c = 0; c < 3; ++c)
-      hn::StoreU(
-          hn::IfThenElseZero(surface, hn::Min(hn::Max(hn::Div(light[c], sum), lo[c]), hi[c])), d,
-          out[c] + x0);
+    for (int c = 0; c < 3; ++c) {
+      const VF own_light = hn::LoadU(d, own[c] + x0);
+      VF light = hn::Mul(hn::Set(d, kOwnValueWeight), own_light), lo = own_light, hi = own_light;
+      for (int ky = 0; ky < 2; ++ky) {
+        const VF ql = hn::LoadU(d, coarse_light[c] + base[ky]);
+        for (int kx = 0; kx < 2; ++kx) {
+          const VF v = hn::TableLookupLanes(ql, kx ? second_tap : first_tap);
+          const VF q = wq[2 * ky + kx];
+          light = hn::Add(light, hn::Mul(q, v));
+          const VF counted = hn::IfThenElse(hn::Gt(q, hn::Zero(d)), v, own_light);
+          lo = hn::Min(lo, counted), hi = hn::Max(hi, counted);
+        }
+      }
+      hn::StoreU(hn::IfThenElseZero(surface, hn::Min(hn::Max(hn::Div(light, sum), lo), hi)), d,
+                 out[c] + x0);
+    }
   }
   for (; x0 < w; ++x0) upsample_pixel(fine, x0, y, coarse, coarse_light, own, terms, out);
 }
@@ -349,6 +415,7 @@ HWY_EXPORT(RangeWeightsSimd);
 HWY_EXPORT(UpsampleRowSimd);
 HWY_EXPORT(DepthGradientRow);
 HWY_EXPORT(DownsampleRowSimd);
+HWY_EXPORT(JointBilateralRowSimd);
 
 bool simd_forced_scalar() {
   static const bool forced = [] {
@@ -372,6 +439,21 @@ void depth_gradient_row(const float* z, int w, int h, int y, float* gx, float* g
     return;
   }
   HWY_DYNAMIC_DISPATCH(DepthGradientRow)(z, w, h, y, gx, gy);
+}
+
+void joint_bilateral_row_scalar(const GuidePlanes& g, const float* const light[3], int y,
+                                int radius, const float* taps, const RangeTerms& terms,
+                                float* const out[3]) {
+  for (int x = 0; x < g.width; ++x) joint_bilateral_pixel(g, light, x, y, radius, taps, terms, out);
+}
+
+void joint_bilateral_row(const GuidePlanes& g, const float* const light[3], int y, int radius,
+                         const float* taps, const RangeTerms& terms, float* const out[3]) {
+  if (simd_forced_scalar() || terms.integer_normal_power < 0) {
+    joint_bilateral_row_scalar(g, light, y, radius, taps, terms, out);
+    return;
+  }
+  HWY_DYNAMIC_DISPATCH(JointBilateralRowSimd)(g, light, y, radius, taps, terms, out);
 }
 
 void downsample_row_scalar(const GuidePlanes& fine, const float* const fine_light[3], int y,

@@ -84,7 +84,7 @@ inline __attribute__((always_inline)) float range_weight(const Surface& p, const
   // plane passes as one surface; relative to p's depth, so that the test does not depend on
   // the scene's scale. An overflow gives inf or NaN, which the test below rejects.
   const float dz = (q.z - p.z) - p.gx * dx - p.gy * dy;
-  const float s = dz * terms.inv_sigma_depth / p.z;
+  const float s = dz * (terms.inv_sigma_depth / p.z);  // the factor once per pixel in kernels
   const float exponent = 0.5f * s * s;
   if (!(exponent < kMaxExponent)) return 0.0f;  // also rejects NaN
   float w = exp_negative(exponent);
@@ -233,6 +233,51 @@ inline void upsample_pixel(const GuidePlanes& fine, int x, int y, const GuidePla
   }
   for (int c = 0; c < 3; ++c) out[c][x] = std::min(std::max(light[c] / sum, lo[c]), hi[c]);
 }
+
+// Pixel (x, y) of joint_bilateral_row below.
+inline void joint_bilateral_pixel(const GuidePlanes& g, const float* const light[3], int x, int y,
+                                  int radius, const float* taps, const RangeTerms& terms,
+                                  float* const out[3]) {
+  const std::size_t i = static_cast<std::size_t>(y) * g.width + x;
+  if (!is_surface(g.z[i])) {
+    for (int c = 0; c < 3; ++c) out[c][x] = 0.0f;
+    return;
+  }
+  const Surface p = g.at(i);
+  float weight_sum = 0, sum[3] = {0, 0, 0}, lo[3] = {kInf, kInf, kInf},
+        hi[3] = {-kInf, -kInf, -kInf};
+  for (int qy = std::max(0, y - radius); qy <= std::min(g.height - 1, y + radius); ++qy) {
+    for (int qx = std::max(0, x - radius); qx <= std::min(g.width - 1, x + radius); ++qx) {
+      const std::size_t j = static_cast<std::size_t>(qy) * g.width + qx;
+      const float spatial = taps[std::abs(qx - x)] * taps[std::abs(qy - y)];
+      // p itself counts fully, so that the sum is never 0; background weighs 0.
+      const float range = j == i ? 1.0f
+                                 : range_weight(p, g.at(j), static_cast<float>(qx - x),
+                                                static_cast<float>(qy - y), terms);
+      const float wq = spatial * range;
+      if (!(wq > 0)) continue;
+      weight_sum += wq;
+      for (int c = 0; c < 3; ++c) {
+        const float v = light[c][j];
+        sum[c] += wq * v;
+        lo[c] = std::min(lo[c], v), hi[c] = std::max(hi[c], v);
+      }
+    }
+  }
+  for (int c = 0; c < 3; ++c) out[c][x] = std::min(std::max(sum[c] / weight_sum, lo[c]), hi[c]);
+}
+
+// Row y of the joint bilateral filter of `light` (3 planes, finite) guided by `g`: a square
+// window of `radius`, spatial weights taps[|dx|] taps[|dy|] times range_weight, the mean
+// clamped to the range of the values it averages; out[c][x] for x in [0, g.width), 0 on
+// background.
+void joint_bilateral_row(const GuidePlanes& g, const float* const light[3], int y, int radius,
+                         const float* taps, const RangeTerms& terms, float* const out[3]);
+
+// The scalar twin of joint_bilateral_row, for the tests.
+void joint_bilateral_row_scalar(const GuidePlanes& g, const float* const light[3], int y,
+                                int radius, const float* taps, const RangeTerms& terms,
+                                float* const out[3]);
 
 // A row of a coarser level's guides being written (no gradients: they follow from the depths).
 struct GuideRow {
