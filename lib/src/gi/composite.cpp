@@ -21,13 +21,17 @@ Image reflected_radiance(const GBuffer& g, bool with_emission) {
   Image out(w, h, 3);
   const bool emission = with_emission && !g.emission.empty();
   parallel_for_rows(h, [&](int y) {
-    for (int x = 0; x < w; ++x) {
-      if (!g.is_surface(x, y)) continue;
-      for (int c = 0; c < 3; ++c) {
+    const std::size_t row = static_cast<std::size_t>(y) * w;
+    const float* depth = g.depth.plane(0) + row;
+    for (int c = 0; c < 3; ++c) {
+      const float* direct = g.direct.plane(c) + row;
+      const float* emitted = emission ? g.emission.plane(c) + row : nullptr;
+      float* o = out.plane(c) + row;
+      for (int x = 0; x < w; ++x) {
         // Negative light (a renderer's denoiser can leave some) is not a source.
-        float v = std::max(0.0f, g.direct.at(c, x, y));
-        if (emission) v += std::max(0.0f, g.emission.at(c, x, y));
-        out.at(c, x, y) = v;
+        float v = std::max(0.0f, direct[x]);
+        if (emitted) v += std::max(0.0f, emitted[x]);
+        o[x] = std::isfinite(depth[x]) ? v : 0.0f;
       }
     }
   });
@@ -40,25 +44,33 @@ FrameResult composite_frame(const GBuffer& g, Image indirect) {
   r.indirect = std::move(indirect);
   r.gi = Image(w, h, 3);
   r.composite = Image(w, h, 4);
+  const bool emission = !g.emission.empty(), beauty = !g.beauty.empty();
   parallel_for_rows(h, [&](int y) {
-    for (int x = 0; x < w; ++x) {
-      const bool surface = g.is_surface(x, y);
-      for (int c = 0; c < 3; ++c) {
-        float& ind = r.indirect.at(c, x, y);
-        if (!surface) ind = 0.0f;
-        const float gi = surface ? finite(g.albedo.at(c, x, y) * ind) : 0.0f;
-        r.gi.at(c, x, y) = gi;
-        float rgb;
-        if (surface) {
-          rgb = g.direct.at(c, x, y) + gi;
-          if (!g.emission.empty()) rgb += g.emission.at(c, x, y);
-        } else {
-          rgb = g.beauty.empty() ? 0.0f : g.beauty.at(c, x, y);
+    const std::size_t row = static_cast<std::size_t>(y) * w;
+    const float* depth = g.depth.plane(0) + row;
+    for (int c = 0; c < 3; ++c) {
+      float* ind = r.indirect.plane(c) + row;
+      float* gi = r.gi.plane(c) + row;
+      float* out = r.composite.plane(c) + row;
+      const float* albedo = g.albedo.plane(c) + row;
+      const float* direct = g.direct.plane(c) + row;
+      const float* emitted = emission ? g.emission.plane(c) + row : nullptr;
+      const float* background = beauty ? g.beauty.plane(c) + row : nullptr;
+      for (int x = 0; x < w; ++x) {
+        if (!std::isfinite(depth[x])) {
+          ind[x] = gi[x] = 0.0f;
+          out[x] = background ? finite(background[x]) : 0.0f;
+          continue;
         }
-        r.composite.at(c, x, y) = finite(rgb);
+        gi[x] = finite(albedo[x] * ind[x]);
+        float rgb = direct[x] + gi[x];
+        if (emitted) rgb += emitted[x];
+        out[x] = finite(rgb);
       }
-      r.composite.at(3, x, y) = g.beauty.empty() ? 1.0f : finite(g.beauty.at(3, x, y));
     }
+    float* alpha = r.composite.plane(3) + row;
+    const float* beauty_alpha = beauty ? g.beauty.plane(3) + row : nullptr;
+    for (int x = 0; x < w; ++x) alpha[x] = beauty_alpha ? finite(beauty_alpha[x]) : 1.0f;
   });
   return r;
 }
