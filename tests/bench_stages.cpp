@@ -14,14 +14,15 @@
 
 #include "composite.h"
 #include "denoise.h"
+#include "denoise_kernels.h"
 #include "environment.h"
 #include "gather.h"
 #include "misses.h"
-#include "denoise_kernels.h"
 #include "slice_kernel.h"
 #include "slices.h"
 #include "ssgi/io.h"
 #include "ssgi/pipeline.h"
+#include "ssgi/threads.h"
 
 namespace {
 
@@ -202,6 +203,9 @@ int main(int argc, char** argv) {
                  frame_path().c_str());
     return 1;
   }
+  // SSGI_BENCH_THREADS=1 for single-thread timings (steadier on a shared machine).
+  const char* threads = std::getenv("SSGI_BENCH_THREADS");
+  const ssgi::ThreadLimit limit(threads ? std::atoi(threads) : 0);
   benchmark::Initialize(&argc, argv);
   benchmark::RunSpecifiedBenchmarks();
   return 0;

@@ -33,25 +33,30 @@ V Atan2(D d, V y, V x) {
 }
 
 template <class D, class V>
-V SectorCoordinate(D d, const SliceFrame& f, V wx, V wy, V wz) {
+HWY_INLINE V SectorCoordinate(D d, const SliceFrame& f, V wx, V wy, V wz) {
   const V c = hn::Add(hn::Add(hn::Mul(wx, hn::Set(d, f.vx)), hn::Mul(wy, hn::Set(d, f.vy))),
                       hn::Mul(wz, hn::Set(d, f.vz)));
   const V s = hn::Add(hn::Add(hn::Mul(wx, hn::Set(d, f.tx)), hn::Mul(wy, hn::Set(d, f.ty))),
                       hn::Mul(wz, hn::Set(d, f.tz)));
-  const V inv = hn::Div(hn::Set(d, 1.0f), hn::Sqrt(hn::Add(hn::Mul(c, c), hn::Mul(s, s))));
-  V theta = Atan2(d, s, c), sn = hn::Mul(s, inv), cs = hn::Mul(c, inv);
-  const V cg = hn::Set(d, f.cg), sg = hn::Set(d, f.sg);
+  const V inv = hn::Div(hn::Set(d, 1.0f), hn::Add(hn::Mul(c, c), hn::Mul(s, s)));
+  V theta = Atan2(d, s, c), sin2 = hn::Mul(hn::Mul(s, s), inv),
+    sin_cos = hn::Mul(hn::Mul(s, c), inv);
+  auto below_view = hn::Lt(s, hn::Zero(d));
+  const V clamped_sin2 = hn::Set(d, f.cg * f.cg), clamped_sin_cos = hn::Set(d, -(f.cg * f.sg));
   const auto below = hn::Lt(theta, hn::Set(d, f.lo_theta));
   theta = hn::IfThenElse(below, hn::Set(d, f.lo_theta), theta);
-  sn = hn::IfThenElse(below, hn::Neg(cg), sn);
-  cs = hn::IfThenElse(below, sg, cs);
+  sin2 = hn::IfThenElse(below, clamped_sin2, sin2);
+  sin_cos = hn::IfThenElse(below, clamped_sin_cos, sin_cos);
+  below_view = f.cg > 0 ? hn::Or(below, below_view) : hn::AndNot(below, below_view);
   const auto above = hn::Gt(theta, hn::Set(d, f.hi_theta));
   theta = hn::IfThenElse(above, hn::Set(d, f.hi_theta), theta);
-  sn = hn::IfThenElse(above, cg, sn);
-  cs = hn::IfThenElse(above, hn::Neg(sg), cs);
-  const V g = hn::Mul(hn::Set(d, 0.5f), hn::Add(hn::Mul(hn::Mul(cg, sn), sn),
-                                                hn::Mul(sg, hn::Sub(theta, hn::Mul(sn, cs)))));
-  const V m = hn::IfThenElse(hn::Lt(sn, hn::Zero(d)), hn::Neg(g), g);
+  sin2 = hn::IfThenElse(above, clamped_sin2, sin2);
+  sin_cos = hn::IfThenElse(above, clamped_sin_cos, sin_cos);
+  below_view = f.cg < 0 ? hn::Or(above, below_view) : hn::AndNot(above, below_view);
+  const V g = hn::Mul(
+      hn::Set(d, 0.5f),
+      hn::Add(hn::Mul(hn::Set(d, f.cg), sin2), hn::Mul(hn::Set(d, f.sg), hn::Sub(theta, sin_cos))));
+  const V m = hn::IfThenElse(below_view, hn::Neg(g), g);
   return hn::Sub(hn::Mul(hn::Sub(m, hn::Set(d, f.h_lo)), hn::Set(d, f.to_sector)),
                  hn::Set(d, f.u_rot));
 }

@@ -51,13 +51,17 @@ struct SliceFrame {
 inline float sector_coordinate(const SliceFrame& f, float wx, float wy, float wz) {
   const float c = (wx * f.vx + wy * f.vy) + wz * f.vz;
   const float s = (wx * f.tx + wy * f.ty) + wz * f.tz;
-  const float inv = 1.0f / std::sqrt(c * c + s * s);
-  float theta = fast_atan2(s, c), sn = s * inv, cs = c * inv;
-  if (theta < f.lo_theta) theta = f.lo_theta, sn = -f.cg, cs = f.sg;
-  if (theta > f.hi_theta) theta = f.hi_theta, sn = f.cg, cs = -f.sg;
+  // sin^2 theta and sin theta cos theta need no square root.
+  const float inv = 1.0f / (c * c + s * s);
+  float theta = fast_atan2(s, c), sin2 = (s * s) * inv, sin_cos = (s * c) * inv;
+  bool below_view = s < 0;  // the sign of sin theta
+  if (theta < f.lo_theta)
+    theta = f.lo_theta, sin2 = f.cg * f.cg, sin_cos = -(f.cg * f.sg), below_view = f.cg > 0;
+  if (theta > f.hi_theta)
+    theta = f.hi_theta, sin2 = f.cg * f.cg, sin_cos = -(f.cg * f.sg), below_view = f.cg < 0;
   // The slice's measure cos(theta - gamma) |sin theta| integrated from 0 to theta.
-  const float g = 0.5f * ((f.cg * sn) * sn + f.sg * (theta - sn * cs));
-  const float m = sn < 0 ? -g : g;
+  const float g = 0.5f * (f.cg * sin2 + f.sg * (theta - sin_cos));
+  const float m = below_view ? -g : g;
   return (m - f.h_lo) * f.to_sector - f.u_rot;
 }
 

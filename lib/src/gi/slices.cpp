@@ -289,14 +289,23 @@ struct SliceTracer {
                               model.thickness};
         SideSamples& samples = scratch();
         const int count = march_side(mesh_view, frame, march, &samples);
+        // Every sample is written, and kept (the index moves on) when it brought sectors of its
+        // own: no branch on data.
+        const std::size_t at = pixels->size();
+        pixels->resize(at + count);
+        weights->resize(at + count);
+        std::int32_t* pixel_out = pixels->data() + at;
+        float* weight_out = weights->data() + at;
+        int kept = 0;
         for (int j = 0; j < count && mask != all; ++j) {
           const std::uint32_t fresh = samples.bits[j] & ~mask;
-          if (fresh) {
-            pixels->push_back(samples.pixel[j + 1]);
-            weights->push_back(sector_weight * static_cast<float>(__builtin_popcount(fresh)));
-            mask |= fresh;
-          }
+          mask |= fresh;
+          pixel_out[kept] = samples.pixel[j + 1];
+          weight_out[kept] = sector_weight * static_cast<float>(__builtin_popcount(fresh));
+          kept += fresh != 0;
         }
+        pixels->resize(at + kept);
+        weights->resize(at + kept);
       }
       const std::uint32_t missed = ~mask;
       *miss += sector_weight * static_cast<float>(__builtin_popcount(missed));
