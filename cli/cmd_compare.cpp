@@ -184,7 +184,11 @@ std::optional<Args> parse_args(int argc, char** argv) {
       case ':':
         ssgi::throw_usage(std::string("option '") + argv[optind - 1] + "' needs a value");
       default:
-        ssgi::throw_usage("unknown option '" + unknown_option_name(argv) + "'");
+        // optopt holds an unknown short option; an unknown long one is the last argument read.
+        ssgi::throw_usage("unknown option '" +
+                          (optopt > 0 && optopt < 128 ? std::string("-") + static_cast<char>(optopt)
+                                                      : std::string(argv[optind - 1])) +
+                          "' for ssgi compare");
     }
   }
   if (argc - optind != 2)

@@ -19,10 +19,11 @@ using Json = nlohmann::ordered_json;
 void print_help() {
   std::printf(
       "usage: ssgi info INPUT [options]\n\n"
-      "Prints the resolution, windows, frames, detected layout and channels, cameras and\n"
-      "the processing plan. Accepts every option of 'ssgi run' (the plan depends on them).\n\n"
+      "Prints the resolution, windows, frames, detected layout and channels, cameras\n"
+      "and the processing plan for the options given (those of 'ssgi run': the plan\n"
+      "depends on them).\n\n"
       "%s",
-      common_options_help());
+      options_help(kInfoCommand).c_str());
 }
 
 // "1-6", "1-9x2", "1,4,7-9": frames as compact ranges.
@@ -152,13 +153,11 @@ void print_text(const ssgi::InputOptions& in, const ssgi::SequenceInfo& seq, con
 }  // namespace
 
 int run_info(int argc, char** argv) {
-  const CommonOptions o = parse_common_options(argc, argv, /*need_output=*/false);
+  const CommonOptions o = parse_common_options(kInfoCommand, argc, argv, /*need_output=*/false);
   if (o.help) {
     print_help();
     return kExitOk;
   }
-  if (o.given.count("spp")) ssgi::throw_usage("--spp is for ssgi reference");
-  if (o.given.count("stats")) ssgi::throw_usage("--stats is for ssgi run");
   install_log_handler(o.verbose, o.quiet);
   const ssgi::ThreadLimit threads(o.threads);
   const ssgi::InputOptions& in = o.run.input;

@@ -11,40 +11,26 @@
 namespace ssgi_cli {
 namespace {
 
-constexpr int kDefaultSpp = 256;
-constexpr int kMaxSpp = 4096;  // the pipeline's limit on rays per pixel, as --spp checks
-
 void print_help() {
   std::printf(
       "usage: ssgi reference INPUT -o OUTPUT [--spp N] [options]\n\n"
-      "Traces the converged answer to the screen-space problem with Embree: N cosine-weighted\n"
-      "rays per pixel against the depth buffer's mesh (the same surface model, misses and\n"
-      "bounces as ssgi run; --miss extend acts as env). Writes indirect.{R,G,B}, gi.{R,G,B}\n"
-      "and the composite R,G,B,A like ssgi run, to measure it with ssgi compare.\n\n"
-      "reference:\n"
-      "  --spp N               rays per pixel and bounce, 1 to %d (default %d); --rays and\n"
-      "                        --max-steps do not apply\n"
-      "  --denoise MODE        none (default here) or pyramid\n"
-      "  --temporal MODE       none (default here), ema[:ALPHA] or window[:K]\n\n%s",
-      kMaxSpp, kDefaultSpp, common_options_help());
+      "Traces the converged answer to the screen-space problem with Embree: N\n"
+      "cosine-weighted rays per pixel against the depth buffer's mesh (the surface\n"
+      "model, misses and bounces of ssgi run; --miss extend acts as env). Writes\n"
+      "indirect.{R,G,B}, gi.{R,G,B} and the composite R,G,B,A like ssgi run, to\n"
+      "measure it with ssgi compare.\n\n%s",
+      options_help(kReferenceCommand).c_str());
 }
 
 }  // namespace
 
 int run_reference(int argc, char** argv) {
-  CommonOptions o = parse_common_options(argc, argv, /*need_output=*/true);
+  // Its defaults (subcommand_defaults): the Embree tracer, no denoiser, no temporal stage.
+  const CommonOptions o = parse_common_options(kReferenceCommand, argc, argv, /*need_output=*/true);
   if (o.help) {
     print_help();
     return kExitOk;
   }
-  if (o.given.count("rays")) ssgi::throw_usage("ssgi reference takes --spp, not --rays");
-  ssgi::GiSettings& gi = o.run.gi;
-  gi.tracer = ssgi::Tracer::kReference;
-  gi.rays = o.spp > 0 ? o.spp : kDefaultSpp;
-  // The reference is each frame's converged answer: a denoiser or a temporal filter would only
-  // add its own bias.
-  if (!o.given.count("denoise")) gi.denoise = ssgi::DenoiseMode::kNone;
-  if (!o.given.count("temporal")) gi.temporal = ssgi::TemporalMode::kNone;
   return run_with_progress(o);
 }
 

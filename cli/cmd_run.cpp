@@ -15,18 +15,17 @@ void print_help() {
       "Adds screen-space diffuse global illumination to an EXR G-buffer sequence.\n"
       "INPUT and OUTPUT are file names or patterns (shot.####.exr, shot.%%04d.exr,\n"
       "shot.1-50#.exr). Writes indirect.{R,G,B}, gi.{R,G,B} and the composite R,G,B,A.\n\n%s",
-      common_options_help());
+      options_help(kRunCommand).c_str());
 }
 
 }  // namespace
 
 int run_run(int argc, char** argv) {
-  const CommonOptions o = parse_common_options(argc, argv, /*need_output=*/true);
+  const CommonOptions o = parse_common_options(kRunCommand, argc, argv, /*need_output=*/true);
   if (o.help) {
     print_help();
     return kExitOk;
   }
-  if (o.given.count("spp")) ssgi::throw_usage("--spp is for ssgi reference; ssgi run takes --rays");
   return run_with_progress(o);
 }
 

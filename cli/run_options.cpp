@@ -1,7 +1,5 @@
 #include "run_options.h"
 
-#include <getopt.h>
-
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -15,95 +13,6 @@
 
 namespace ssgi_cli {
 namespace {
-
-enum LongOnly : int {
-  kFrames = 1000,
-  kSkipMissing,
-  kLayout,
-  kChannel,
-  kDepthKind,
-  kFov,
-  kCamera,
-  kRays,
-  kTracer,
-  kSlices,
-  kTraceScale,
-  kMaxSteps,
-  kMaxDistance,
-  kThickness,
-  kStartOffset,
-  kBounces,
-  kMiss,
-  kEnv,
-  kEnvUp,
-  kEnvColor,
-  kGatherEmission,
-  kNoGatherEmission,
-  kDenoise,
-  kDenoiseRadius,
-  kDenoiseSigmaSpatial,
-  kDenoiseSigmaDepth,
-  kDenoiseNormalPower,
-  kDenoiseBlur,
-  kTemporal,
-  kSpp,
-  kJson,
-  kStats,
-  kPreset,
-  kSeed,
-  kThreads,
-  kCompression,
-  kDatatype,
-  kNoPassthrough,
-  kLayerPrefix,
-};
-
-const option kOptions[] = {
-    {"output", required_argument, nullptr, 'o'},
-    {"frames", required_argument, nullptr, kFrames},
-    {"skip-missing", no_argument, nullptr, kSkipMissing},
-    {"layout", required_argument, nullptr, kLayout},
-    {"channel", required_argument, nullptr, kChannel},
-    {"depth-kind", required_argument, nullptr, kDepthKind},
-    {"fov", required_argument, nullptr, kFov},
-    {"camera", required_argument, nullptr, kCamera},
-    {"rays", required_argument, nullptr, kRays},
-    {"tracer", required_argument, nullptr, kTracer},
-    {"slices", required_argument, nullptr, kSlices},
-    {"trace-scale", required_argument, nullptr, kTraceScale},
-    {"max-steps", required_argument, nullptr, kMaxSteps},
-    {"max-distance", required_argument, nullptr, kMaxDistance},
-    {"thickness", required_argument, nullptr, kThickness},
-    {"start-offset", required_argument, nullptr, kStartOffset},
-    {"bounces", required_argument, nullptr, kBounces},
-    {"miss", required_argument, nullptr, kMiss},
-    {"env", required_argument, nullptr, kEnv},
-    {"env-up", required_argument, nullptr, kEnvUp},
-    {"env-color", required_argument, nullptr, kEnvColor},
-    {"gather-emission", no_argument, nullptr, kGatherEmission},
-    {"no-gather-emission", no_argument, nullptr, kNoGatherEmission},
-    {"denoise", required_argument, nullptr, kDenoise},
-    {"denoise-radius", required_argument, nullptr, kDenoiseRadius},
-    {"denoise-sigma-spatial", required_argument, nullptr, kDenoiseSigmaSpatial},
-    {"denoise-sigma-depth", required_argument, nullptr, kDenoiseSigmaDepth},
-    {"denoise-normal-power", required_argument, nullptr, kDenoiseNormalPower},
-    {"denoise-blur", required_argument, nullptr, kDenoiseBlur},
-    {"temporal", required_argument, nullptr, kTemporal},
-    {"spp", required_argument, nullptr, kSpp},
-    {"json", no_argument, nullptr, kJson},
-    {"stats", required_argument, nullptr, kStats},
-    {"preset", required_argument, nullptr, kPreset},
-    {"seed", required_argument, nullptr, kSeed},
-    {"threads", required_argument, nullptr, kThreads},
-    {"compression", required_argument, nullptr, kCompression},
-    {"datatype", required_argument, nullptr, kDatatype},
-    {"no-passthrough", no_argument, nullptr, kNoPassthrough},
-    {"layer-prefix", required_argument, nullptr, kLayerPrefix},
-    {"verbose", no_argument, nullptr, 'v'},
-    {"quiet", no_argument, nullptr, 'q'},
-    {"help", no_argument, nullptr, 'h'},
-    {nullptr, 0, nullptr, 0},
-};
 
 double parse_double(const char* name, const char* text) {
   errno = 0;
@@ -157,89 +66,37 @@ void parse_temporal(const char* text, ssgi::GiSettings* gi) {
 
 }  // namespace
 
-std::string unknown_option_name(char** argv) {
-  // optopt holds an unknown short option; an unknown long one is the last argument read.
-  return optopt > 0 && optopt < 128 ? std::string("-") + static_cast<char>(optopt)
-                                    : std::string(argv[optind - 1]);
-}
-
-const char* common_options_help() {
-  return "input:\n"
-         "  --frames LIST         frames to write: 1-50, 1-50x2, 3,7,9, -5--1\n"
-         "  --skip-missing        skip missing frames with a warning instead of failing\n"
-         "  --layout NAME         channel layout preset (default: detected)\n"
-         "  --channel ROLE=NAME   take ROLE (depth, normal, albedo, direct, emission, motion,\n"
-         "                        position, beauty) from layer NAME or channels A,B,C\n"
-         "  --depth-kind KIND     planar, radial, inverse or negative (default: the preset's)\n"
-         "  --fov DEGREES         static camera with this horizontal field of view\n"
-         "  --camera FILE.json    per-frame cameras from a sidecar file\n"
-         "gi:\n"
-         "  --preset P            draft, default or final: the tracing settings below (man\n"
-         "                        ssgi, PRESETS); options given override it\n"
-         "  --tracer T            slices (default) or march\n"
-         "  --slices N            slices per traced pixel, 32 directions each (default 2)\n"
-         "  --trace-scale N       trace one pixel in NxN: 1, 2, 4, 8 or auto (default: the\n"
-         "                        preset's trace grid width, 480 across)\n"
-         "  --max-steps N         samples per slice side or per march ray (default 28)\n"
-         "  --rays N              march: rays per pixel and bounce (default 8)\n"
-         "  --max-distance D      longest ray in scene units, 0 = unlimited (default 0)\n"
-         "  --thickness T         a depth pixel is a slab from z to z*(1+T) (default 0.1)\n"
-         "  --start-offset F      rays start F*depth off the surface (default 0.002)\n"
-         "  --bounces N           diffuse bounces within the frame (default 8)\n"
-         "  --miss MODE           what rays that miss bring: auto (default), frame, extend\n"
-         "                        or env (man ssgi, MISSES)\n"
-         "  --env FILE            lat-long environment map for rays that miss\n"
-         "  --env-up y|z          the map's up axis in world space (default y)\n"
-         "  --env-color R,G,B     constant radiance for rays that miss (default 0)\n"
-         "  --gather-emission     rays pick up emission too (default: the preset's)\n"
-         "  --no-gather-emission  rays pick up reflected direct light only\n"
-         "  --denoise MODE        pyramid or none (default pyramid)\n"
-         "  --denoise-radius N, --denoise-sigma-spatial S, --denoise-sigma-depth S,\n"
-         "  --denoise-normal-power P, --denoise-blur N   denoise parameters (man ssgi)\n"
-         "  --spp N               ssgi reference only: rays per pixel (default 256)\n"
-         "  --json                ssgi info only: the report as JSON on stdout\n"
-         "  --stats FILE.json     ssgi run only: per-frame read_ms, gi_ms, write_ms and the\n"
-         "                        settings\n"
-         "  --temporal MODE       window[:K] (default, K = 2), ema[:ALPHA] (default 0.1) or\n"
-         "                        none\n"
-         "  --seed N              noise seed (default 0)\n"
-         "output:\n"
-         "  -o, --output PATTERN  output sequence, e.g. out/shot.####.exr\n"
-         "  --compression C       zip, zips, piz, rle, pxr24, b44, b44a, dwaa[:L], dwab[:L],\n"
-         "                        none (default zip)\n"
-         "  --datatype T          half or float for ssgi's channels (default float)\n"
-         "  --no-passthrough      do not copy the input's channels\n"
-         "  --layer-prefix P      write ssgi's channels under P.\n"
-         "general:\n"
-         "  --threads N           worker threads (default: all cores)\n"
-         "  -v, --verbose         print the plan and per-frame timings\n"
-         "  -q, --quiet           no progress, no warnings\n"
-         "  -h, --help            this help\n";
-}
-
-CommonOptions parse_common_options(int argc, char** argv, bool need_output) {
+CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool need_output) {
   CommonOptions o;
+  o.run = subcommand_defaults(sub);
   ssgi::GiSettings& gi = o.run.gi;
   ssgi::InputOptions& in = o.run.input;
   for (int i = 0; i < argc; ++i) o.command_line += (i ? " " : "ssgi ") + std::string(argv[i]);
+  // First every option as given (getopt_long, only this subcommand's table), then the preset,
+  // then the others in order over it: the options given override what the preset sets.
+  const std::vector<option> table = getopt_options(sub);
+  const std::string short_options = getopt_short_options(sub);
+  std::vector<std::pair<int, std::string>> given;
   optind = 0;  // getopt_long: restart (0 also resets GNU's internal state)
   opterr = 0;
-  bool env_color_given = false;
-  // The preset first, whatever its place: the options given override what it sets.
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if (arg == "--") break;
-    if (arg == "--preset" && i + 1 < argc) o.preset = argv[i + 1];
-    if (arg.rfind("--preset=", 0) == 0) o.preset = arg.substr(9);
-  }
-  ssgi::apply_preset(o.preset, &gi);
   int c;
-  int option_index = -1;
-  while ((c = getopt_long(argc, argv, ":o:vqh", kOptions, &option_index)) != -1) {
-    const char* a = optarg;
-    for (const option& known : kOptions)
-      if (known.name != nullptr && known.val == c) o.given.insert(known.name);
-    switch (c) {
+  while ((c = getopt_long(argc, argv, short_options.c_str(), table.data(), nullptr)) != -1) {
+    if (c == ':') ssgi::throw_usage(std::string("option '") + argv[optind - 1] + "' needs a value");
+    if (c == '?') {
+      // optopt holds an unknown short option; an unknown long one is the last argument read.
+      throw_unknown_option(sub, optopt > 0 && optopt < 128
+                                    ? std::string("-") + static_cast<char>(optopt)
+                                    : std::string(argv[optind - 1]));
+    }
+    given.emplace_back(c, optarg ? optarg : "");
+    o.given.insert(option_spec(c).name);
+    if (c == kPreset) o.preset = optarg;
+  }
+  if (sub & (kRunCommand | kInfoCommand)) ssgi::apply_preset(o.preset, &gi);
+  bool env_color_given = false;
+  for (const auto& [id, value] : given) {
+    const char* a = value.c_str();
+    switch (id) {
       case 'o':
         o.run.output = a;
         break;
@@ -371,7 +228,7 @@ CommonOptions parse_common_options(int argc, char** argv, bool need_output) {
         parse_temporal(a, &gi);
         break;
       case kSpp:
-        o.spp = static_cast<int>(parse_long("spp", a, 1, 4096));
+        gi.rays = static_cast<int>(parse_long("spp", a, 1, 4096));
         break;
       case kJson:
         o.json = true;
@@ -412,12 +269,12 @@ CommonOptions parse_common_options(int argc, char** argv, bool need_output) {
       case 'h':
         o.help = true;
         break;
-      case ':':
-        ssgi::throw_usage(std::string("option '") + argv[optind - 1] + "' needs a value");
       default:
-        ssgi::throw_usage("unknown option '" + unknown_option_name(argv) + "'");
+        break;  // every id of the table is handled above
     }
   }
+  if (o.verbose && o.quiet)
+    ssgi::throw_usage("-v (--verbose) and -q (--quiet) contradict each other");
   if (o.help) return o;
   // GNU getopt_long moves operands after the options, so `ssgi run IN -o OUT` works too.
   if (optind >= argc) ssgi::throw_usage("no input sequence given");

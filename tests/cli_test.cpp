@@ -254,7 +254,15 @@ TEST_F(Cli, UsageErrorsExitTwoAndWriteNothing) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_EQ(r.err.rfind("ssgi: error: unknown subcommand 'render'\nusage: ssgi", 0), 0u);
   expect_usage_error(run_ssgi({"run", in, "-o", out, "--bogus"}), "run",
-                     "unknown option '--bogus'");
+                     "unknown option '--bogus' for ssgi run");
+  // The option table: an ambiguous prefix names its candidates, an option of another
+  // subcommand says whose it is, and -v with -q contradict.
+  expect_usage_error(run_ssgi({"run", in, "-o", out, "--lay", "x"}), "run",
+                     "ambiguous option '--lay' for ssgi run: --layout, --layer-prefix");
+  expect_usage_error(run_ssgi({"run", in, "-o", out, "-v", "-q"}), "run",
+                     "-v (--verbose) and -q (--quiet) contradict each other");
+  expect_usage_error(run_ssgi({"run", in, "-o", out, "-x"}), "run",
+                     "unknown option '-x' for ssgi run");
   expect_usage_error(run_ssgi({"run", in}), "run", "no output given (-o PATTERN)");
   expect_usage_error(run_ssgi({"run", "-o", out}), "run", "no input sequence given");
   expect_usage_error(run_ssgi({"run", in, "-o", out, "--rays"}), "run",
@@ -272,7 +280,7 @@ TEST_F(Cli, UsageErrorsExitTwoAndWriteNothing) {
                      "unknown --depth-kind 'ndc' (planar, radial, inverse, negative)");
   r = run_ssgi({"info", in, "--denoise-sigma-spatial", "0"});
   EXPECT_EQ(r.out, "");
-  expect_usage_error(r, "info", "denoise: sigma_spatial must be positive (got 0.000000)");
+  expect_usage_error(r, "info", "--denoise-sigma-spatial must be positive (got 0)");
   // ssgi writes OpenEXR only, whatever the output's extension would make OIIO write.
   expect_usage_error(run_ssgi({"run", in, "-o", path("out.####.tif")}), "run",
                      "output '" + path("out.####.tif") + "' must end in .exr: ssgi writes OpenEXR");
@@ -321,7 +329,7 @@ TEST_F(Cli, InfoJsonIsTheSameReportForMachines) {
   EXPECT_FALSE(j["plan"].empty());
   EXPECT_TRUE(j["error"].is_null());
   expect_usage_error(run_ssgi({"run", in, "-o", path("o.####.exr"), "--json"}), "run",
-                     "--json is for ssgi info");
+                     "'--json' is not an option of ssgi run (it is of ssgi info)");
 }
 
 TEST_F(Cli, InfoDetectsEveryLayoutPreset) {
@@ -618,10 +626,11 @@ TEST_F(Cli, ReferenceWritesWhatRunWritesAndComparesWithIt) {
   r = run_ssgi(
       {"compare", "--channels", "indirect", "--fail", "1e-4", path("run.exr"), path("ref.exr")});
   EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
-  expect_usage_error(run_ssgi({"reference", in, "-o", path("x.exr"), "--rays", "4"}), "reference",
-                     "ssgi reference takes --spp, not --rays");
+  expect_usage_error(
+      run_ssgi({"reference", in, "-o", path("x.exr"), "--rays", "4"}), "reference",
+      "'--rays' is not an option of ssgi reference (it is of ssgi run or ssgi info)");
   expect_usage_error(run_ssgi({"run", in, "-o", path("x.exr"), "--spp", "4"}), "run",
-                     "--spp is for ssgi reference; ssgi run takes --rays");
+                     "'--spp' is not an option of ssgi run (it is of ssgi reference)");
 }
 
 TEST_F(Cli, FramesOptionAndRangeInNameSelectFramesToWrite) {
@@ -844,7 +853,9 @@ void write_native_parts(const std::string& path, const std::vector<NativePart>& 
   auto out = OIIO::ImageOutput::create(path);
   ASSERT_TRUE(out && out->open(path, static_cast<int>(specs.size()), specs.data())) << path;
   for (std::size_t i = 0; i < parts.size(); ++i) {
-    if (i > 0) ASSERT_TRUE(out->open(path, specs[i], OIIO::ImageOutput::AppendSubimage));
+    if (i > 0) {
+      ASSERT_TRUE(out->open(path, specs[i], OIIO::ImageOutput::AppendSubimage));
+    }
     ASSERT_TRUE(out->write_image(OIIO::TypeUnknown, parts[i].bytes.data())) << out->geterror();
   }
   ASSERT_TRUE(out->close());
@@ -1046,8 +1057,69 @@ TEST_F(Cli, PresetsSetTheirSettingsAndGivenOptionsOverrideThem) {
   EXPECT_EQ(fin["settings"]["slices"], "3");  // given, so not the preset's 4
   EXPECT_EQ(fin["settings"]["trace-scale"], "auto (480 across)");
   EXPECT_EQ(fin["settings"]["max-steps"], "28");
+  // An abbreviation getopt_long accepts is the preset too.
+  const nlohmann::json abbreviated = settings_of({"--pre", "draft"});
+  EXPECT_EQ(abbreviated["preset"], "draft");
+  EXPECT_EQ(abbreviated["settings"]["slices"], "1");
   expect_usage_error(run_ssgi({"info", in, "--preset", "best"}), "info",
                      "unknown --preset 'best' (draft, default, final)");
+}
+
+TEST_F(Cli, HelpListsEachSubcommandsOwnOptionsWithTheDefaultsTheyRunWith) {
+  // One option table: each --help lists the options its subcommand takes, with the defaults
+  // that subcommand starts from.
+  auto help = [&](const std::string& sub) {
+    const CliResult r = run_ssgi({sub, "--help"});
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return r.out;
+  };
+  auto lists = [](const std::string& text, const std::string& option) {
+    return text.find("  " + option + " ") != std::string::npos ||
+           text.find("  " + option + "\n") != std::string::npos;
+  };
+  const std::string run_text = help("run"), info_text = help("info"),
+                    reference_text = help("reference");
+  // Each option's help as one line (its wrapped continuation lines joined).
+  auto joined = [](std::string text) {
+    std::string out;
+    for (std::size_t i = 0; i < text.size(); ++i) {
+      if (text[i] == '\n' && text.compare(i + 1, 24, std::string(24, ' ')) == 0) {
+        out += ' ';
+        i += 24;
+      } else {
+        out += text[i];
+      }
+    }
+    return out;
+  };
+  const std::string run = joined(run_text), info = joined(info_text),
+                    reference = joined(reference_text);
+  EXPECT_TRUE(lists(run, "--max-steps N"));
+  EXPECT_NE(run.find("samples per slice side or per march ray (default: 28)"), std::string::npos);
+  EXPECT_NE(run.find("(default: window:2)"), std::string::npos);
+  EXPECT_TRUE(lists(run, "--stats FILE.json"));
+  EXPECT_FALSE(lists(run, "--spp N"));
+  EXPECT_FALSE(lists(run, "--json"));
+  EXPECT_TRUE(lists(info, "--json"));
+  EXPECT_FALSE(lists(info, "--stats FILE.json"));
+  EXPECT_TRUE(lists(reference, "--spp N"));
+  EXPECT_NE(reference.find("rays per pixel and bounce, 1 to 4096 (default: 256)"),
+            std::string::npos);
+  EXPECT_FALSE(lists(reference, "--rays N"));
+  EXPECT_FALSE(lists(reference, "--max-steps N"));
+  // The reference's own defaults: no denoiser, no temporal stage.
+  EXPECT_NE(reference.find("pyramid or none (default: none)"), std::string::npos);
+  EXPECT_NE(reference.find("or none (default: none)"), std::string::npos);
+  EXPECT_NE(run.find("pyramid or none (default: pyramid)"), std::string::npos);
+  // Every line fits a terminal of 80 columns.
+  for (const std::string* text : {&run_text, &info_text, &reference_text}) {
+    std::size_t start = 0;
+    while (start < text->size()) {
+      const std::size_t end = std::min(text->find('\n', start), text->size());
+      EXPECT_LE(end - start, 79u) << text->substr(start, end - start);
+      start = end + 1;
+    }
+  }
 }
 
 TEST_F(Cli, StatsRecordEachFramesTimingsAndTheSettings) {
@@ -1075,7 +1147,7 @@ TEST_F(Cli, StatsRecordEachFramesTimingsAndTheSettings) {
   EXPECT_EQ(entries(),
             (std::set<std::string>{"o.0001.exr", "o.0002.exr", "o.0003.exr", "stats.json"}));
   expect_usage_error(run_ssgi({"info", testdata("sample/sample.0001.exr"), "--stats", "s.json"}),
-                     "info", "--stats is for ssgi run");
+                     "info", "'--stats' is not an option of ssgi info (it is of ssgi run)");
 }
 
 TEST_F(Cli, ScalarTwinsGiveTheSameBitsAsSimd) {

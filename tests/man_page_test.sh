@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Checks man/ssgi.1: every long option in the getopt_long tables of cli/*.cpp is documented
+# Checks man/ssgi.1: every long option of the option table and the getopt_long tables of cli/*.cpp is documented
 # (as \-\-name or --name), and the page renders with groff without a single warning.
 # Usage: man_page_test.sh [PROJECT_SOURCE_DIR]   (default: the repository this script is in)
 set -euo pipefail
@@ -13,9 +13,14 @@ if [ ! -s "$page" ]; then
   exit 1
 fi
 
-# Long options: entries such as {"max-steps", required_argument, nullptr, kMaxSteps}.
-mapfile -t options < <(grep -ohE '\{"[A-Za-z0-9][A-Za-z0-9-]*",[[:space:]]*(no|required|optional)_argument' \
-  "$root"/cli/*.cpp | sed -E 's/^\{"([^"]+)".*/\1/' | sort -u)
+# Long options: the option table's entries ({kMaxSteps, "max-steps", ...} in
+# cli/option_table.cpp) and getopt_long tables ({"max-steps", required_argument, ...}).
+mapfile -t options < <( {
+  grep -ohE '\{"[A-Za-z0-9][A-Za-z0-9-]*",[[:space:]]*(no|required|optional)_argument' \
+    "$root"/cli/*.cpp | sed -E 's/^\{"([^"]+)".*/\1/'
+  grep -ohE "^[[:space:]]*\{(k[A-Za-z]+|'[a-z]'), \"[a-z0-9-]+\"," "$root"/cli/option_table.cpp |
+    sed -E 's/.*"([^"]+)",$/\1/'
+} | sort -u)
 if [ ${#options[@]} -eq 0 ]; then
   echo "man_page_test: found no getopt_long options in $root/cli/*.cpp" >&2
   exit 1

@@ -33,7 +33,7 @@ void validate(const GiSettings& s) {
   if (s.trace_scale != 0 && s.trace_scale != 1 && s.trace_scale != 2 && s.trace_scale != 4 &&
       s.trace_scale != 8)
     throw_usage("--trace-scale must be auto, 1, 2, 4 or 8");
-  if (s.trace_width < 1) throw_usage("the trace width must be at least 1");
+  if (s.trace_width < 1) throw_usage("the preset's trace width must be at least 1");
   if (s.tracer == Tracer::kSlices && s.miss == MissMode::kExtend)
     throw_usage("--miss extend needs the march (--tracer march)");
   // Beyond 1e30 a distance no longer fits the march's float arithmetic; 0 means unlimited.
@@ -41,7 +41,7 @@ void validate(const GiSettings& s) {
     throw_usage("--max-distance must be between 0 (unlimited) and 1e30");
   if (!(s.thickness > 0) || !std::isfinite(s.thickness)) throw_usage("--thickness must be > 0");
   if (!(s.start_offset >= 0) || s.start_offset > 1)
-    throw_usage("the start offset must be between 0 and 1");
+    throw_usage("--start-offset must be between 0 and 1");
   if (s.bounces < 1 || s.bounces > 64) throw_usage("--bounces must be between 1 and 64");
   for (float c : s.env_color)
     if (!(c >= 0) || !std::isfinite(c)) throw_usage("--env-color must be finite and >= 0");

@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -189,18 +190,22 @@ void check_shapes(const Image& depth, const Image& normal) {
 }  // namespace
 
 void validate_denoise_settings(const DenoiseSettings& s) {
+  // Named by the command line's options (the pyramid's depth has none: it follows the trace
+  // grid and the preset).
   auto fail = [](const std::string& what, double value) {
-    throw_usage("denoise: " + what + " (got " + std::to_string(value) + ")");
+    std::ostringstream v;
+    v << value;
+    throw_usage(what + " (got " + v.str() + ")");
   };
-  if (s.levels < 0) fail("levels must be >= 0", s.levels);
-  if (s.radius < 0) fail("radius must be >= 0", s.radius);
-  if (s.upsample_blur_radius < 0) fail("upsample_blur_radius must be >= 0", s.upsample_blur_radius);
+  if (s.levels < 0) fail("the denoiser's pyramid levels must be >= 0", s.levels);
+  if (s.radius < 0) fail("--denoise-radius must be >= 0", s.radius);
+  if (s.upsample_blur_radius < 0) fail("--denoise-blur must be >= 0", s.upsample_blur_radius);
   if (!(s.sigma_spatial > 0 && std::isfinite(s.sigma_spatial)))
-    fail("sigma_spatial must be positive", s.sigma_spatial);
+    fail("--denoise-sigma-spatial must be positive", s.sigma_spatial);
   if (!(s.sigma_depth > 0 && std::isfinite(s.sigma_depth)))
-    fail("sigma_depth must be positive", s.sigma_depth);
+    fail("--denoise-sigma-depth must be positive", s.sigma_depth);
   if (!(s.normal_power >= 0 && std::isfinite(s.normal_power)))
-    fail("normal_power must be >= 0", s.normal_power);
+    fail("--denoise-normal-power must be >= 0", s.normal_power);
 }
 
 Image denoise_pyramid(const Image& noisy, const Image& depth, const Image& normal,

@@ -1,0 +1,312 @@
+#include "option_table.h"
+
+#include <OpenImageIO/strutil.h>
+
+#include <cstring>
+#include <sstream>
+
+#include "ssgi/error.h"
+
+namespace ssgi_cli {
+namespace {
+
+namespace Strutil = OIIO::Strutil;
+
+constexpr unsigned kPlanning = kRunCommand | kInfoCommand | kReferenceCommand;
+
+// A number as the help prints it: the shortest form that reads back as the same value.
+std::string number(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+const char* tracer_name(ssgi::Tracer t) {
+  switch (t) {
+    case ssgi::Tracer::kSlices:
+      return "slices";
+    case ssgi::Tracer::kScreenSpace:
+      return "march";
+    case ssgi::Tracer::kReference:
+      return "reference (Embree)";
+  }
+  return "";
+}
+
+std::string temporal_text(const ssgi::GiSettings& gi) {
+  switch (gi.temporal) {
+    case ssgi::TemporalMode::kNone:
+      return "none";
+    case ssgi::TemporalMode::kEma:
+      return "ema:" + number(gi.ema_alpha);
+    case ssgi::TemporalMode::kWindow:
+      return "window:" + std::to_string(gi.temporal_radius);
+  }
+  return "";
+}
+
+using ssgi::RunOptions;
+
+// Each entry's default reads the subcommand's defaults (subcommand_defaults), so that the help
+// cannot drift from the code.
+const std::vector<OptionSpec> kTable = {
+    // input
+    {kFrames, "frames", 0, "LIST", OptionGroup::kInput, kPlanning,
+     "frames to write: 1-50, 1-50x2, 3,7,9, -5--1 (default: the pattern's range, else every "
+     "frame on disk)",
+     nullptr},
+    {kSkipMissing, "skip-missing", 0, nullptr, OptionGroup::kInput, kPlanning,
+     "skip missing frames with a warning instead of failing", nullptr},
+    {kLayout, "layout", 0, "NAME", OptionGroup::kInput, kPlanning,
+     "channel layout preset (default: detected from the first frame)", nullptr},
+    {kChannel, "channel", 0, "ROLE=NAME", OptionGroup::kInput, kPlanning,
+     "take ROLE (depth, normal, albedo, direct, emission, motion, position, beauty) from layer "
+     "NAME or channels A,B,C",
+     nullptr},
+    {kDepthKind, "depth-kind", 0, "KIND", OptionGroup::kInput, kPlanning,
+     "planar, radial, inverse or negative (default: the layout's)", nullptr},
+    {kFov, "fov", 0, "DEGREES", OptionGroup::kInput, kPlanning,
+     "a static camera with this horizontal field of view", nullptr},
+    {kCamera, "camera", 0, "FILE.json", OptionGroup::kInput, kPlanning,
+     "per-frame cameras from a sidecar file", nullptr},
+    // gi
+    {kPreset, "preset", 0, "P", OptionGroup::kGi, kRunCommand | kInfoCommand,
+     "draft, default or final: the tracing settings below (man ssgi, PRESETS); options given "
+     "override it",
+     [](const RunOptions&) { return std::string("default"); }},
+    {kTracer, "tracer", 0, "T", OptionGroup::kGi, kRunCommand | kInfoCommand, "slices or march",
+     [](const RunOptions& d) { return std::string(tracer_name(d.gi.tracer)); }},
+    {kSlices, "slices", 0, "N", OptionGroup::kGi, kRunCommand | kInfoCommand,
+     "slices per traced pixel, 32 directions each",
+     [](const RunOptions& d) { return std::to_string(d.gi.slices); }},
+    {kTraceScale, "trace-scale", 0, "N", OptionGroup::kGi, kRunCommand | kInfoCommand,
+     "trace one pixel in NxN: 1, 2, 4, 8 or auto (the largest keeping the preset's trace grid "
+     "width across)",
+     [](const RunOptions& d) {
+       return d.gi.trace_scale == 0 ? "auto, " + std::to_string(d.gi.trace_width) + " across"
+                                    : std::to_string(d.gi.trace_scale);
+     }},
+    {kMaxSteps, "max-steps", 0, "N", OptionGroup::kGi, kRunCommand | kInfoCommand,
+     "samples per slice side or per march ray",
+     [](const RunOptions& d) { return std::to_string(d.gi.max_steps); }},
+    {kRays, "rays", 0, "N", OptionGroup::kGi, kRunCommand | kInfoCommand,
+     "--tracer march: rays per pixel and bounce",
+     [](const RunOptions& d) { return std::to_string(d.gi.rays); }},
+    {kSpp, "spp", 0, "N", OptionGroup::kGi, kReferenceCommand,
+     "rays per pixel and bounce, 1 to 4096",
+     [](const RunOptions& d) { return std::to_string(d.gi.rays); }},
+    {kMaxDistance, "max-distance", 0, "D", OptionGroup::kGi, kPlanning,
+     "longest ray in scene units, 0 = unlimited",
+     [](const RunOptions& d) { return number(d.gi.max_distance); }},
+    {kThickness, "thickness", 0, "T", OptionGroup::kGi, kPlanning,
+     "a depth pixel is a slab from z to z*(1+T)",
+     [](const RunOptions& d) { return number(d.gi.thickness); }},
+    {kStartOffset, "start-offset", 0, "F", OptionGroup::kGi, kPlanning,
+     "rays start F*depth off the surface, F in [0, 1]",
+     [](const RunOptions& d) { return number(d.gi.start_offset); }},
+    {kBounces, "bounces", 0, "N", OptionGroup::kGi, kPlanning,
+     "diffuse bounces within the frame, 1 to 64",
+     [](const RunOptions& d) { return std::to_string(d.gi.bounces); }},
+    {kMiss, "miss", 0, "MODE", OptionGroup::kGi, kPlanning,
+     "what rays that miss bring: auto, frame, extend or env (man ssgi, MISSES)",
+     [](const RunOptions& d) { return std::string(ssgi::miss_mode_name(d.gi.miss)); }},
+    {kEnv, "env", 0, "FILE", OptionGroup::kGi, kPlanning,
+     "lat-long environment map for rays that miss", nullptr},
+    {kEnvUp, "env-up", 0, "y|z", OptionGroup::kGi, kPlanning, "the map's up axis in world space",
+     [](const RunOptions& d) { return std::string(1, d.gi.env_up); }},
+    {kEnvColor, "env-color", 0, "R,G,B", OptionGroup::kGi, kPlanning,
+     "constant radiance for rays that miss",
+     [](const RunOptions& d) {
+       const auto& c = d.gi.env_color;
+       return c[0] == c[1] && c[1] == c[2] ? number(c[0])
+                                           : number(c[0]) + "," + number(c[1]) + "," + number(c[2]);
+     }},
+    {kGatherEmission, "gather-emission", 0, nullptr, OptionGroup::kGi, kPlanning,
+     "rays pick up emission too (default: the layout's)", nullptr},
+    {kNoGatherEmission, "no-gather-emission", 0, nullptr, OptionGroup::kGi, kPlanning,
+     "rays pick up reflected direct light only", nullptr},
+    {kDenoise, "denoise", 0, "MODE", OptionGroup::kGi, kPlanning, "pyramid or none",
+     [](const RunOptions& d) {
+       return std::string(d.gi.denoise == ssgi::DenoiseMode::kPyramid ? "pyramid" : "none");
+     }},
+    {kDenoiseRadius, "denoise-radius", 0, "N", OptionGroup::kGi, kPlanning,
+     "the filter's radius at the pyramid's coarsest level, 0 to 32",
+     [](const RunOptions& d) { return std::to_string(d.gi.denoise_settings.radius); }},
+    {kDenoiseSigmaSpatial, "denoise-sigma-spatial", 0, "S", OptionGroup::kGi, kPlanning,
+     "its spatial Gaussian, in pixels of that level",
+     [](const RunOptions& d) { return number(d.gi.denoise_settings.sigma_spatial); }},
+    {kDenoiseSigmaDepth, "denoise-sigma-depth", 0, "S", OptionGroup::kGi, kPlanning,
+     "the relative depth difference weighing exp(-1/2)",
+     [](const RunOptions& d) { return number(d.gi.denoise_settings.sigma_depth); }},
+    {kDenoiseNormalPower, "denoise-normal-power", 0, "P", OptionGroup::kGi, kPlanning,
+     "weight max(0, n.n')^P between normals",
+     [](const RunOptions& d) { return number(d.gi.denoise_settings.normal_power); }},
+    {kDenoiseBlur, "denoise-blur", 0, "N", OptionGroup::kGi, kPlanning,
+     "radius of the edge-aware blur after each upsampling, 0 to 8",
+     [](const RunOptions& d) {
+       return std::to_string(d.gi.denoise_settings.upsample_blur_radius);
+     }},
+    {kTemporal, "temporal", 0, "MODE", OptionGroup::kGi, kPlanning,
+     "window[:K] (frames +-K), ema[:ALPHA] or none",
+     [](const RunOptions& d) { return temporal_text(d.gi); }},
+    {kSeed, "seed", 0, "N", OptionGroup::kGi, kPlanning, "noise seed",
+     [](const RunOptions& d) { return std::to_string(d.gi.seed); }},
+    // output
+    {'o', "output", 'o', "PATTERN", OptionGroup::kOutput, kPlanning,
+     "output sequence, e.g. out/shot.####.exr", nullptr},
+    {kCompression, "compression", 0, "C", OptionGroup::kOutput, kPlanning,
+     "zip, zips, piz, rle, pxr24, b44, b44a, dwaa[:L], dwab[:L] or none",
+     [](const RunOptions& d) { return d.write.compression; }},
+    {kDatatype, "datatype", 0, "T", OptionGroup::kOutput, kPlanning,
+     "half or float for ssgi's channels",
+     [](const RunOptions& d) { return std::string(d.write.half ? "half" : "float"); }},
+    {kNoPassthrough, "no-passthrough", 0, nullptr, OptionGroup::kOutput, kPlanning,
+     "do not copy the input's channels", nullptr},
+    {kLayerPrefix, "layer-prefix", 0, "P", OptionGroup::kOutput, kPlanning,
+     "write ssgi's channels under P. (e.g. ssgi.indirect.R)", nullptr},
+    {kStats, "stats", 0, "FILE.json", OptionGroup::kOutput, kRunCommand,
+     "per-frame read_ms, gi_ms, write_ms and the settings", nullptr},
+    {kJson, "json", 0, nullptr, OptionGroup::kOutput, kInfoCommand, "the report as JSON on stdout",
+     nullptr},
+    // general
+    {kThreads, "threads", 0, "N", OptionGroup::kGeneral, kPlanning,
+     "worker threads (default: all cores)", nullptr},
+    {'v', "verbose", 'v', nullptr, OptionGroup::kGeneral, kPlanning,
+     "print the plan and per-frame timings", nullptr},
+    {'q', "quiet", 'q', nullptr, OptionGroup::kGeneral, kPlanning, "no progress, no warnings",
+     nullptr},
+    {'h', "help", 'h', nullptr, OptionGroup::kGeneral, kPlanning, "this help", nullptr},
+};
+
+const char* group_name(OptionGroup g) {
+  switch (g) {
+    case OptionGroup::kInput:
+      return "input";
+    case OptionGroup::kGi:
+      return "gi";
+    case OptionGroup::kOutput:
+      return "output";
+    case OptionGroup::kGeneral:
+      return "general";
+  }
+  return "";
+}
+
+// "--name", "--name=" prefix of a written argument, without the value.
+std::string written_name(const std::string& written) {
+  std::string name = written;
+  while (!name.empty() && name.front() == '-') name.erase(name.begin());
+  const auto eq = name.find('=');
+  return eq == std::string::npos ? name : name.substr(0, eq);
+}
+
+// The subcommands of `mask`, as "ssgi run or ssgi info".
+std::string subcommands_text(unsigned mask) {
+  std::vector<std::string> names;
+  for (Subcommand s : {kRunCommand, kInfoCommand, kReferenceCommand})
+    if (mask & s) names.push_back(std::string("ssgi ") + subcommand_name(s));
+  return Strutil::join(names, " or ");
+}
+
+}  // namespace
+
+const char* subcommand_name(Subcommand s) {
+  switch (s) {
+    case kRunCommand:
+      return "run";
+    case kInfoCommand:
+      return "info";
+    case kReferenceCommand:
+      return "reference";
+  }
+  return "";
+}
+
+const std::vector<OptionSpec>& option_table() { return kTable; }
+
+const OptionSpec& option_spec(int id) {
+  for (const OptionSpec& o : kTable)
+    if (o.id == id) return o;
+  throw ssgi::Error(ssgi::ErrorKind::kInternal, {}, "no option with id " + std::to_string(id));
+}
+
+ssgi::RunOptions subcommand_defaults(Subcommand s) {
+  ssgi::RunOptions d;
+  ssgi::apply_preset("default", &d.gi);
+  if (s == kReferenceCommand) {
+    // The reference is each frame's converged answer: a denoiser or a temporal filter would
+    // only add its own bias.
+    d.gi.tracer = ssgi::Tracer::kReference;
+    d.gi.rays = 256;
+    d.gi.denoise = ssgi::DenoiseMode::kNone;
+    d.gi.temporal = ssgi::TemporalMode::kNone;
+  }
+  return d;
+}
+
+std::vector<option> getopt_options(Subcommand s) {
+  std::vector<option> out;
+  for (const OptionSpec& o : kTable)
+    if (o.subcommands & s)
+      out.push_back({o.name, o.arg ? required_argument : no_argument, nullptr, o.id});
+  out.push_back({nullptr, 0, nullptr, 0});
+  return out;
+}
+
+std::string getopt_short_options(Subcommand s) {
+  std::string out = ":";
+  for (const OptionSpec& o : kTable) {
+    if (!(o.subcommands & s) || o.short_name == 0) continue;
+    out += o.short_name;
+    if (o.arg) out += ':';
+  }
+  return out;
+}
+
+std::string options_help(Subcommand s) {
+  const ssgi::RunOptions defaults = subcommand_defaults(s);
+  constexpr int kColumn = 24, kWidth = 79;
+  std::string out;
+  for (OptionGroup g :
+       {OptionGroup::kInput, OptionGroup::kGi, OptionGroup::kOutput, OptionGroup::kGeneral}) {
+    std::string lines;
+    for (const OptionSpec& o : kTable) {
+      if (o.group != g || !(o.subcommands & s)) continue;
+      std::string left = "  ";
+      if (o.short_name) left += std::string("-") + o.short_name + ", ";
+      left += std::string("--") + o.name;
+      if (o.arg) left += std::string(" ") + o.arg;
+      std::string help = o.help;
+      if (o.default_of) help += " (default: " + o.default_of(defaults) + ")";
+      std::string line = left.size() + 1 < kColumn ? left + std::string(kColumn - left.size(), ' ')
+                                                   : left + "\n" + std::string(kColumn, ' ');
+      // Continuation lines start in the help column.
+      line += Strutil::wordwrap(help, kWidth, kColumn);
+      lines += line + "\n";
+    }
+    if (!lines.empty()) out += std::string(group_name(g)) + ":\n" + lines;
+  }
+  return out;
+}
+
+void throw_unknown_option(Subcommand s, const std::string& written) {
+  const std::string command = std::string("ssgi ") + subcommand_name(s);
+  const bool long_form = written.rfind("--", 0) == 0;
+  const std::string name = written_name(written);
+  if (long_form && !name.empty()) {
+    std::vector<std::string> matches;
+    for (const OptionSpec& o : kTable)
+      if ((o.subcommands & s) && std::strncmp(o.name, name.c_str(), name.size()) == 0)
+        matches.push_back(std::string("--") + o.name);
+    if (matches.size() > 1)
+      ssgi::throw_usage("ambiguous option '" + written + "' for " + command + ": " +
+                        Strutil::join(matches, ", "));
+    for (const OptionSpec& o : kTable)
+      if (name == o.name && !(o.subcommands & s))
+        ssgi::throw_usage("'--" + name + "' is not an option of " + command + " (it is of " +
+                          subcommands_text(o.subcommands) + ")");
+  }
+  ssgi::throw_usage("unknown option '" + written + "' for " + command);
+}
+
+}  // namespace ssgi_cli
