@@ -17,6 +17,14 @@ namespace ssgi::detail {
 namespace {
 
 constexpr int kSectors = 32;
+
+// The number of sectors (set bits) in a mask. Bit arithmetic rather than __builtin_popcount,
+// which is a library call on the x86-64 baseline (no POPCNT instruction assumed).
+inline int sector_count(std::uint32_t v) {
+  v = v - ((v >> 1) & 0x55555555u);
+  v = (v & 0x33333333u) + ((v >> 2) & 0x33333333u);
+  return static_cast<int>((((v + (v >> 4)) & 0x0f0f0f0fu) * 0x01010101u) >> 24);
+}
 constexpr float kPi = kSlicePi;
 
 struct V3 {
@@ -190,6 +198,39 @@ struct SliceTracer {
                          static_cast<float>(d.x * m[0][2] + d.y * m[1][2] + d.z * m[2][2])});
   }
 
+  // The environment's light along each missed sector's ray: the angle where the slice's
+  // measure reaches (k + u_rot) / to_sector above its lowest value, found on a table of the
+  // measure at kEnvAngles + 1 evenly spaced angles (their sines and cosines by rotation, not
+  // by libm) and interpolated in it; the ray's direction interpolated between the table's.
+  void add_sector_env_light(std::uint32_t missed, const SliceMeasure& measure, float lo_theta,
+                            float hi_theta, float h_lo, float to_sector, float u_rot,
+                            const V3& view, const V3& t, float sector_weight,
+                            float env_light[3]) const {
+    constexpr int kEnvAngles = 64;
+    const float step = (hi_theta - lo_theta) / kEnvAngles;
+    const float cos_step = std::cos(step), sin_step = std::sin(step);
+    std::array<float, kEnvAngles + 1> m, c, s;
+    c[0] = std::cos(lo_theta), s[0] = std::sin(lo_theta);
+    for (int i = 0; i <= kEnvAngles; ++i) {
+      if (i > 0) {
+        c[i] = c[i - 1] * cos_step - s[i - 1] * sin_step;
+        s[i] = s[i - 1] * cos_step + c[i - 1] * sin_step;
+      }
+      m[i] = measure(Angle{lo_theta + static_cast<float>(i) * step, s[i], c[i]});
+    }
+    int i = 0;
+    for (int k = 0; k < kSectors; ++k) {
+      if (!(missed >> k & 1u)) continue;
+      const float target = h_lo + (static_cast<float>(k) + u_rot) / to_sector;
+      while (i < kEnvAngles - 1 && m[i + 1] < target) ++i;  // targets rise with k
+      const float span = m[i + 1] - m[i];
+      const float f = span > 0 ? std::clamp((target - m[i]) / span, 0.0f, 1.0f) : 0.5f;
+      const float dc = (1.0f - f) * c[i] + f * c[i + 1], ds = (1.0f - f) * s[i] + f * s[i + 1];
+      const std::array<float, 3> l = env_radiance(normalized(dc * view + ds * t));
+      for (int ch = 0; ch < 3; ++ch) env_light[ch] += sector_weight * l[ch];
+    }
+  }
+
   // Traces the slices of trace sample `s` from pixel `p`; appends its hits.
   void trace(int p, std::vector<std::int32_t>* pixels, std::vector<float>* weights, float* miss,
              float env_light[3]) const {
@@ -301,29 +342,23 @@ struct SliceTracer {
           const std::uint32_t fresh = samples.bits[j] & ~mask;
           mask |= fresh;
           pixel_out[kept] = samples.pixel[j + 1];
-          weight_out[kept] = sector_weight * static_cast<float>(__builtin_popcount(fresh));
+          weight_out[kept] = sector_weight * static_cast<float>(sector_count(fresh));
           kept += fresh != 0;
         }
         pixels->resize(at + kept);
         weights->resize(at + kept);
       }
       const std::uint32_t missed = ~mask;
-      *miss += sector_weight * static_cast<float>(__builtin_popcount(missed));
+      *miss += sector_weight * static_cast<float>(sector_count(missed));
       if (!env.is_black() && missed) {
-        for (int k = 0; k < kSectors; ++k) {
-          if (!(missed >> k & 1u)) continue;
-          // The sector's ray: the angle where the measure reaches (k + u_rot) / kSectors.
-          const float target = h_lo + (static_cast<float>(k) + u_rot) / to_sector;
-          float lo = lowest.theta, hi = highest.theta;
-          for (int it = 0; it < 24; ++it) {
-            const float mid = 0.5f * (lo + hi);
-            const Angle m{mid, std::sin(mid), std::cos(mid)};
-            (measure(m) < target ? lo : hi) = mid;
-          }
-          const float th = 0.5f * (lo + hi);
-          const V3 d = std::cos(th) * view + std::sin(th) * t;
-          const std::array<float, 3> l = env_radiance(d);
-          for (int c = 0; c < 3; ++c) env_light[c] += sector_weight * l[c];
+        if (env.is_constant()) {
+          // The same light from every direction: the missed sectors' share of it.
+          const std::array<float, 3> l = env.radiance({0.0f, 0.0f, 1.0f});
+          const float share = sector_weight * static_cast<float>(sector_count(missed));
+          for (int c = 0; c < 3; ++c) env_light[c] += share * l[c];
+        } else {
+          add_sector_env_light(missed, measure, lowest.theta, highest.theta, h_lo, to_sector, u_rot,
+                               view, t, sector_weight, env_light);
         }
       }
     }
