@@ -152,6 +152,20 @@ SideSamples& scratch() {
   return samples;
 }
 
+// One trace sample's hits before they join its row's.
+struct PixelHits {
+  std::vector<std::int32_t> pixel;
+  std::vector<float> weight;
+  void reserve(std::size_t n) {
+    if (pixel.size() < n) pixel.resize(n), weight.resize(n);
+  }
+};
+
+PixelHits& pixel_hits() {
+  thread_local PixelHits hits;
+  return hits;
+}
+
 struct SliceTracer {
   const GBuffer& g;
   const TraceGrid& grid;
@@ -257,8 +271,11 @@ struct SliceTracer {
     const int slices = settings.slices, steps = settings.max_steps;
     const float max_distance = static_cast<float>(settings.max_distance);
     const std::uint32_t all = ~0u;
-    const std::size_t first_entry = weights->size();
     float total_weight = 0;  // the slices' weights, whose mean is 1 over all slice angles
+    // The pixel's hits, staged here (room for every sample) and appended normalised at the end.
+    PixelHits& hits = pixel_hits();
+    hits.reserve(static_cast<std::size_t>(slices) * 2 * static_cast<std::size_t>(steps));
+    int kept = 0;
 
     for (int i = 0; i < slices; ++i) {
       float u_phi, u_rot, u_step;
@@ -332,21 +349,13 @@ struct SliceTracer {
         const int count = march_side(mesh_view, frame, march, &samples);
         // Every sample is written, and kept (the index moves on) when it brought sectors of its
         // own: no branch on data.
-        const std::size_t at = pixels->size();
-        pixels->resize(at + count);
-        weights->resize(at + count);
-        std::int32_t* pixel_out = pixels->data() + at;
-        float* weight_out = weights->data() + at;
-        int kept = 0;
         for (int j = 0; j < count && mask != all; ++j) {
           const std::uint32_t fresh = samples.bits[j] & ~mask;
           mask |= fresh;
-          pixel_out[kept] = samples.pixel[j + 1];
-          weight_out[kept] = sector_weight * static_cast<float>(sector_count(fresh));
+          hits.pixel[kept] = samples.pixel[j + 1];
+          hits.weight[kept] = sector_weight * static_cast<float>(sector_count(fresh));
           kept += fresh != 0;
         }
-        pixels->resize(at + kept);
-        weights->resize(at + kept);
       }
       const std::uint32_t missed = ~mask;
       *miss += sector_weight * static_cast<float>(sector_count(missed));
@@ -370,7 +379,8 @@ struct SliceTracer {
       return;
     }
     const float norm = 1.0f / total_weight;
-    for (std::size_t e = first_entry; e < weights->size(); ++e) (*weights)[e] *= norm;
+    pixels->insert(pixels->end(), hits.pixel.begin(), hits.pixel.begin() + kept);
+    for (int e = 0; e < kept; ++e) weights->push_back(hits.weight[e] * norm);
     *miss *= norm;
     for (int c = 0; c < 3; ++c) env_light[c] *= norm;
   }
