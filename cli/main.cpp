@@ -1,4 +1,7 @@
 // ssgi: screen-space diffuse global illumination for OpenEXR sequences.
+#include <unistd.h>
+
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <exception>
@@ -6,6 +9,7 @@
 
 #include "commands.h"
 #include "ssgi/error.h"
+#include "ssgi/temporary_files.h"
 #include "ssgi/version.h"
 
 namespace {
@@ -34,6 +38,25 @@ void print_usage(std::FILE* out) {
   std::fprintf(out, "\n'ssgi <subcommand> --help' lists its options; man ssgi has the rest.\n");
 }
 
+// SIGINT and SIGTERM: the file being written goes (every finished frame is already whole under
+// its own name), one line says so, and the status is 128 + the signal's number (130, 143), as
+// a shell reports a process the signal stopped. Only async-signal-safe calls.
+extern "C" void stop_on_signal(int signal) {
+  ssgi::remove_temporary_files();
+  const char* message =
+      signal == SIGINT ? "ssgi: stopped by SIGINT\n" : "ssgi: stopped by SIGTERM\n";
+  const ssize_t ignored = ::write(STDERR_FILENO, message, std::strlen(message));
+  (void)ignored;
+  ::_exit(128 + signal);
+}
+
+void install_signal_handlers() {
+  struct sigaction action {};
+  action.sa_handler = stop_on_signal;
+  sigemptyset(&action.sa_mask);
+  for (int signal : {SIGINT, SIGTERM}) sigaction(signal, &action, nullptr);
+}
+
 int exit_code_for(ssgi::ErrorKind kind) {
   switch (kind) {
     case ssgi::ErrorKind::kUsage:
@@ -50,6 +73,7 @@ int exit_code_for(ssgi::ErrorKind kind) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  install_signal_handlers();
   if (argc < 2) {
     print_usage(stderr);
     return ssgi_cli::kExitUsage;

@@ -12,6 +12,7 @@
 
 #include "commands.h"
 #include "ssgi/error.h"
+#include "ssgi/temporary_files.h"
 #include "ssgi/threads.h"
 
 namespace ssgi_cli {
@@ -57,6 +58,7 @@ void write_stats(const std::string& path, const CommonOptions& o, const ssgi::Ru
       {"median", {{"read_ms", median(read)}, {"gi_ms", median(gi)}, {"write_ms", median(write)}}},
       {"frames", frames}};
   const std::string tmp = path + ".tmp";
+  const ssgi::TemporaryFile registered(tmp);  // removed by a signal handler
   {
     std::ofstream file(tmp);
     file << out.dump(2) << "\n";
@@ -77,7 +79,6 @@ void write_stats(const std::string& path, const CommonOptions& o, const ssgi::Ru
 }  // namespace
 
 int run_with_progress(const CommonOptions& o) {
-  if (o.json) ssgi::throw_usage("--json is for ssgi info");
   install_log_handler(o.verbose, o.quiet);
   warn_about_options(o);
   const ssgi::ThreadLimit threads(o.threads);

@@ -1,6 +1,7 @@
 // End-to-end tests of the `ssgi` command line: the built binary on the committed fixtures, its
 // exit codes, its one-line errors, and the files it writes (or does not write).
 #include <OpenImageIO/imageio.h>
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <poll.h>
 #include <spawn.h>
@@ -9,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <csignal>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -1148,6 +1150,83 @@ TEST_F(Cli, StatsRecordEachFramesTimingsAndTheSettings) {
             (std::set<std::string>{"o.0001.exr", "o.0002.exr", "o.0003.exr", "stats.json"}));
   expect_usage_error(run_ssgi({"info", testdata("sample/sample.0001.exr"), "--stats", "s.json"}),
                      "info", "'--stats' is not an option of ssgi info (it is of ssgi run)");
+}
+
+TEST_F(Cli, SignalsStopTheRunRemoveTemporaryFilesAndLeaveFinishedFramesWhole) {
+  // SIGINT and SIGTERM while a frame is being written (its hidden temporary file is on disk)
+  // and at moments after the first frame is done: exit 130 or 143, nothing hidden or temporary
+  // left, every frame on disk a whole, readable EXR.
+  const std::string in = testdata("sample/sample.####.exr");
+  struct Case {
+    int signal;
+    bool mid_write;  // at the first sight of a temporary file, else `after_ms` after frame 1
+    int after_ms;
+  };
+  const Case cases[] = {{SIGINT, true, 0},   {SIGTERM, true, 0},  {SIGINT, true, 0},
+                        {SIGTERM, false, 0}, {SIGINT, false, 40}, {SIGTERM, false, 120}};
+  int interrupted = 0, mid_write = 0;
+  for (std::size_t k = 0; k < std::size(cases); ++k) {
+    const Case& c = cases[k];
+    const std::string dir = path("run" + std::to_string(k));
+    std::filesystem::create_directory(dir);
+    std::vector<std::string> args = {
+        SSGI_BINARY, "run",      in,      "-o",      dir + "/o.####.exr",
+        "-q",        "--preset", "final", "--stats", dir + "/stats.json"};
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, "/dev/null", O_WRONLY, 0);
+    pid_t pid = 0;
+    ASSERT_EQ(posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ), 0);
+    posix_spawn_file_actions_destroy(&actions);
+    // Watch the directory until the moment comes, or the run ends first.
+    int status = 0;
+    bool ended = false, seen_temporary = false;
+    for (int waited = 0; waited < 60000 && !ended; ++waited) {
+      bool temporary = false, first_frame = false;
+      std::error_code ec;
+      for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+        const std::string name = entry.path().filename().string();
+        temporary |= name[0] == '.';
+        first_frame |= name == "o.0001.exr";
+      }
+      if (c.mid_write ? temporary : first_frame) {
+        seen_temporary = temporary;
+        ::usleep(static_cast<useconds_t>(c.after_ms) * 1000);
+        break;
+      }
+      ended = ::waitpid(pid, &status, WNOHANG) == pid;
+      ::usleep(500);
+    }
+    if (!ended) {
+      ::kill(pid, c.signal);
+      ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+    }
+    ASSERT_TRUE(WIFEXITED(status)) << "case " << k;
+    const int code = WEXITSTATUS(status);
+    if (code != 0) {
+      EXPECT_EQ(code, 128 + c.signal) << "case " << k;
+      ++interrupted;
+      mid_write += seen_temporary;
+    }
+    for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+      const std::string name = entry.path().filename().string();
+      EXPECT_NE(name[0], '.') << name << " left after a signal, case " << k;
+      EXPECT_EQ(name.find(".tmp"), std::string::npos) << name;
+      if (name == "stats.json") continue;
+      auto image = OIIO::ImageInput::open(entry.path().string());
+      ASSERT_TRUE(image) << name;
+      std::vector<float> pixels(image->spec().image_pixels() * image->spec().nchannels);
+      EXPECT_TRUE(
+          image->read_image(0, 0, 0, image->spec().nchannels, OIIO::TypeDesc::FLOAT, pixels.data()))
+          << name << ": " << image->geterror();
+    }
+  }
+  // The signals came during the runs, and some while a frame was being written.
+  EXPECT_GE(interrupted, 5);
+  EXPECT_GE(mid_write, 2);
 }
 
 TEST_F(Cli, ScalarTwinsGiveTheSameBitsAsSimd) {

@@ -6,12 +6,14 @@
 #include <climits>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <random>
 #include <string>
 #include <system_error>
 #include <vector>
 
 #include "ssgi/error.h"
+#include "ssgi/temporary_files.h"
 
 namespace ssgi {
 namespace {
@@ -384,3 +386,35 @@ TEST_F(FindFramesOnDiskTest, NothingToFind) {
 
 }  // namespace
 }  // namespace ssgi
+
+// What a signal handler removes: the files registered while being written, and only those.
+TEST(TemporaryFiles, RemovedWhileRegisteredAndKeptOtherwise) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / "ssgi_temporary_files_test";
+  std::filesystem::create_directories(dir);
+  auto touch = [&](const std::string& name) {
+    std::ofstream(dir / name) << "x";
+    return (dir / name).string();
+  };
+  const std::string kept = touch("kept.exr");
+  {
+    std::vector<std::unique_ptr<ssgi::TemporaryFile>> writing;
+    std::vector<std::string> paths;
+    for (int k = 0; k < 3; ++k) {
+      paths.push_back((dir / (".frame" + std::to_string(k) + ".tmp.exr")).string());
+      writing.push_back(std::make_unique<ssgi::TemporaryFile>(paths.back()));
+      touch(".frame" + std::to_string(k) + ".tmp.exr");
+    }
+    writing.erase(writing.begin());  // frame 0 finished: no longer a temporary file
+    ssgi::remove_temporary_files();
+    EXPECT_TRUE(std::filesystem::exists(paths[0]));
+    EXPECT_FALSE(std::filesystem::exists(paths[1]));
+    EXPECT_FALSE(std::filesystem::exists(paths[2]));
+  }
+  // Released slots are free again, and nothing registered is removed twice.
+  const std::string later = touch(".later.tmp.exr");
+  ssgi::remove_temporary_files();
+  EXPECT_TRUE(std::filesystem::exists(later));
+  EXPECT_TRUE(std::filesystem::exists(kept));
+  std::filesystem::remove_all(dir);
+}

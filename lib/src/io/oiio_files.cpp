@@ -72,6 +72,7 @@ AtomicImageWriter::AtomicImageWriter(const std::string& path, std::vector<OIIO::
   tmp_ = (target.parent_path() / ("." + target.filename().string() + ".tmp" +
                                   std::to_string(::getpid()) + target.extension().string()))
              .string();
+  registered_.emplace(tmp_);  // before the file exists
   out_ = OIIO::ImageOutput::create(tmp_);
   if (!out_) fail(one_line(OIIO::geterror()));
   const bool ok = parts_.size() == 1
@@ -116,6 +117,7 @@ void AtomicImageWriter::commit() {
     throw_io(path_, "cannot move the finished " + what_ + " into place: " + why);
   }
   tmp_.clear();
+  registered_.reset();
 }
 
 void write_image_atomically(const std::string& path, const OIIO::ImageSpec& spec,

@@ -7,8 +7,11 @@
 
 #include <cstddef>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
+
+#include "ssgi/temporary_files.h"
 
 namespace ssgi::detail {
 
@@ -53,6 +56,7 @@ class AtomicImageWriter {
  private:
   [[noreturn]] void fail(const std::string& why);
   std::string path_, tmp_, what_;
+  std::optional<TemporaryFile> registered_;  // for a signal handler's remove_temporary_files()
   std::vector<OIIO::ImageSpec> parts_;
   std::unique_ptr<OIIO::ImageOutput> out_;
   std::size_t written_ = 0;
