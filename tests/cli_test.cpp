@@ -730,17 +730,25 @@ TEST_F(Cli, ResolutionChangeFailsThatFrameOnly) {
 TEST_F(Cli, UnwritableOutputFailsOnceWithoutTemporaryFiles) {
   const std::string in = testdata("sample/sample.####.exr");
   std::ofstream(path("file")) << "x";
-  // A directory that is a regular file, and one that does not exist: checked before any frame
-  // is computed, so one line, not one per frame.
+  // A directory that is a regular file, below it or as it: checked before any frame is
+  // computed, so one line, not one per frame.
   CliResult r = run_ssgi({"run", in, "-o", path("file/o.####.exr"), "--rays", "2"});
   EXPECT_EQ(r.exit_code, 4);
-  expect_one_error(r, path("file/o.0001.exr"),
-                   "output directory " + path("file") + " is not a directory");
-  r = run_ssgi({"run", in, "-o", path("none/o.####.exr"), "--rays", "2"});
+  expect_one_error(
+      r, path("file/o.0001.exr"),
+      "output directory " + path("file") + ": " + path("file") + " is not a directory");
+  r = run_ssgi({"run", in, "-o", path("file/sub/o.####.exr"), "--rays", "2"});
   EXPECT_EQ(r.exit_code, 4);
-  expect_one_error(r, path("none/o.0001.exr"),
-                   "output directory " + path("none") + " does not exist");
+  expect_one_error(
+      r, path("file/sub/o.0001.exr"),
+      "output directory " + path("file/sub") + ": " + path("file") + " is not a directory");
   EXPECT_EQ(entries(), std::set<std::string>{"file"});
+  // Missing output folders are made, as mkdir -p would.
+  r = run_ssgi({"run", testdata("sample/sample.0001.exr"), "-o", path("new/shot/o.####.exr"),
+                "--rays", "2", "-q"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(fs::is_regular_file(path("new/shot/o.0001.exr")));
+  fs::remove_all(path("new"));
   // The target name is taken by a directory: the frame is written to a temporary file, the
   // rename fails, and the temporary file is removed.
   fs::create_directory(path("o.0001.exr"));

@@ -45,7 +45,7 @@ void check_outputs(const SequenceInfo& seq, const SequencePattern& out,
                   "output would overwrite input frame " + std::to_string(it->second));
     // Fail before any frame is computed, with one line, rather than once per frame.
     const std::string directory = fs::path(path).parent_path().string();
-    if (directories.insert(directory).second) check_output_directory(path);
+    if (directories.insert(directory).second) make_output_directory(path);
   }
 }
 

@@ -90,6 +90,11 @@ std::string parse_layer_prefix(const std::string& prefix);
 // Throws Error(kIO) naming `path` unless the directory `path` would be written into exists.
 void check_output_directory(const std::string& path);
 
+// Makes the directory `path` would be written into, with its missing parents (mkdir -p).
+// Throws Error(kIO) naming `path` when something that is not a directory is in the way or the
+// directory cannot be made.
+void make_output_directory(const std::string& path);
+
 // Writes `layers` (covering `frame`'s data window) to `path` with the input's header and,
 // when asked, its channels. Written to a temporary file in the same directory, then renamed,
 // so a failure never leaves a partial frame. Throws Error(kIO) naming `path` on failure.

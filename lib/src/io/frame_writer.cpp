@@ -147,6 +147,23 @@ void check_output_directory(const std::string& path) {
                      (fs::exists(dir, ec) ? " is not a directory" : " does not exist"));
 }
 
+void make_output_directory(const std::string& path) {
+  const fs::path dir = fs::absolute(path).parent_path();
+  std::error_code ec;
+  if (fs::is_directory(dir, ec)) return;
+  // The nearest part of the path that exists must be a directory.
+  for (fs::path p = dir; !p.empty() && p != p.root_path(); p = p.parent_path()) {
+    if (!fs::exists(p, ec)) continue;
+    if (!fs::is_directory(p, ec))
+      throw_io(path,
+               "output directory " + dir.string() + ": " + p.string() + " is not a directory");
+    break;
+  }
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir))
+    throw_io(path, "cannot make the output directory " + dir.string() + ": " + ec.message());
+}
+
 void write_frame(const std::string& path, const GBuffer& frame,
                  const std::vector<OutputLayer>& layers, const WriteOptions& options) {
   check_output_directory(path);
