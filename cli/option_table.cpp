@@ -169,6 +169,8 @@ const std::vector<OptionSpec> kTable = {
     {kJson, "json", 0, nullptr, OptionGroup::kOutput, kInfoCommand, "the report as JSON on stdout",
      nullptr},
     // general
+    {kFailFast, "fail-fast", 0, nullptr, OptionGroup::kGeneral, kRunCommand | kReferenceCommand,
+     "stop at the first frame that fails (default: write the others, exit 1)", nullptr},
     {kThreads, "threads", 0, "N", OptionGroup::kGeneral, kPlanning,
      "worker threads (default: all cores)", nullptr},
     {'v', "verbose", 'v', nullptr, OptionGroup::kGeneral, kPlanning,

@@ -59,6 +59,7 @@ enum OptionId : int {
   kDatatype,
   kNoPassthrough,
   kLayerPrefix,
+  kFailFast,
 };
 
 enum class OptionGroup { kInput, kGi, kOutput, kGeneral };

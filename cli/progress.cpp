@@ -106,6 +106,8 @@ int run_with_progress(const CommonOptions& o) {
   if (!o.stats.empty()) write_stats(o.stats, o, report);
   const int failed = report.failed();
   if (failed == 0) return kExitOk;
+  // --fail-fast stopped at the frame that failed: its status says why.
+  if (o.run.fail_fast) return exit_code_for(report.frames.back().error_kind);
   if (failed < static_cast<int>(report.frames.size())) return kExitSomeFramesFailed;
   return exit_code_for(report.frames.front().error_kind);
 }

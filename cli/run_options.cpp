@@ -257,6 +257,9 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
       case kNoPassthrough:
         o.run.write.passthrough = false;
         break;
+      case kFailFast:
+        o.run.fail_fast = true;
+        break;
       case kLayerPrefix:
         o.run.write.layer_prefix = ssgi::parse_layer_prefix(a);
         break;

@@ -727,6 +727,35 @@ TEST_F(Cli, ResolutionChangeFailsThatFrameOnly) {
   EXPECT_EQ(entries(), std::set<std::string>{"r.0001.exr"});
 }
 
+TEST_F(Cli, FailFastStopsAtTheFirstFrameThatFails) {
+  // Frame 2 of 3 is not an EXR. By default frames 1 and 3 are written (exit 1); with
+  // --fail-fast the run stops there, with that frame's status (4), and frame 3 is not tried.
+  for (int f = 1; f <= 3; ++f) {
+    const std::string name = "in.000" + std::to_string(f) + ".exr";
+    if (f == 2)
+      std::ofstream(path(name)) << "not an image";
+    else
+      fs::copy_file(testdata("sample/sample.000" + std::to_string(f) + ".exr"), path(name));
+  }
+  const std::vector<std::string> args = {
+      "run", path("in.####.exr"), "--rays", "2", "--temporal", "none", "-q", "-o"};
+  std::vector<std::string> all = args;
+  all.push_back(path("all.####.exr"));
+  const CliResult r = run_ssgi(all);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_TRUE(fs::exists(path("all.0001.exr")));
+  EXPECT_TRUE(fs::exists(path("all.0003.exr")));
+  std::vector<std::string> fast = args;
+  fast.push_back(path("fast.####.exr"));
+  fast.push_back("--fail-fast");
+  const CliResult f = run_ssgi(fast);
+  EXPECT_EQ(f.exit_code, 4) << f.err;
+  EXPECT_TRUE(fs::exists(path("fast.0001.exr")));
+  EXPECT_FALSE(fs::exists(path("fast.0002.exr")));
+  EXPECT_FALSE(fs::exists(path("fast.0003.exr")));
+  expect_one_error(f, path("in.0002.exr"), "");
+}
+
 TEST_F(Cli, UnwritableOutputFailsOnceWithoutTemporaryFiles) {
   const std::string in = testdata("sample/sample.####.exr");
   std::ofstream(path("file")) << "x";

@@ -115,6 +115,7 @@ RunReport run_sequence(const RunOptions& options, const FrameCallback& on_frame)
     fr.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     report.frames.push_back(fr);
     if (on_frame) on_frame(report.frames.back(), i + 1, total);
+    if (!fr.ok && options.fail_fast) break;  // the frames after it are not attempted
   }
   return report;
 }

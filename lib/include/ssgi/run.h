@@ -16,6 +16,7 @@ struct RunOptions {
   std::string output;  // output pattern, e.g. "out/shot.####.exr"
   WriteOptions write;
   GiSettings gi;
+  bool fail_fast = false;  // --fail-fast: stop at the first frame that fails
 };
 
 // What became of one frame.
