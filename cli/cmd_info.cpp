@@ -58,6 +58,7 @@ struct Report {
   std::vector<std::pair<std::string, std::string>> settings;  // with the options applied
   std::optional<ssgi::Plan> plan;
   std::optional<ssgi::Error> problem;  // the first input problem, reported last
+  ssgi::ThreadBudget threads;          // how many worker threads a run would use, and why
 };
 
 Json window_json(const ssgi::Box2i& b) {
@@ -99,6 +100,7 @@ void print_json(const ssgi::InputOptions& in, const ssgi::SequenceInfo& seq, con
       {"cameras", cameras},
       {"preset", r.preset},
       {"settings", settings},
+      {"threads", {{"count", r.threads.threads}, {"from", r.threads.source}}},
       {"plan", r.plan ? Json(r.plan->reasons) : Json(nullptr)},
       {"error", r.problem ? Json(r.problem->what()) : Json(nullptr)},
   };
@@ -142,6 +144,7 @@ void print_text(const ssgi::InputOptions& in, const ssgi::SequenceInfo& seq, con
   std::printf("settings (preset %s):\n", r.preset.c_str());
   for (const auto& [name, value] : r.settings)
     std::printf("  %-14s %s\n", name.c_str(), value.c_str());
+  std::printf("threads:       %d (%s)\n", r.threads.threads, r.threads.source.c_str());
   std::printf("plan:\n");
   if (r.plan) {
     for (const std::string& reason : r.plan->reasons) std::printf("  %s\n", reason.c_str());
@@ -165,6 +168,7 @@ int run_info(int argc, char** argv) {
   // Bad option values fail before anything is printed; input problems (no camera, no direct
   // light) are reported in their place and the report goes on, then exit with the first one.
   Report r;
+  r.threads = threads.budget();
   r.preset = o.preset;
   r.settings = ssgi::describe_settings(o.run.gi);
   try {

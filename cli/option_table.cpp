@@ -172,7 +172,7 @@ const std::vector<OptionSpec> kTable = {
     {kFailFast, "fail-fast", 0, nullptr, OptionGroup::kGeneral, kRunCommand | kReferenceCommand,
      "stop at the first frame that fails (default: write the others, exit 1)", nullptr},
     {kThreads, "threads", 0, "N", OptionGroup::kGeneral, kPlanning,
-     "worker threads (default: all cores)", nullptr},
+     "worker threads (default: the scheduler's allocation, else the CPUs allowed)", nullptr},
     {'v', "verbose", 'v', nullptr, OptionGroup::kGeneral, kPlanning,
      "print the plan and per-frame timings", nullptr},
     {'q', "quiet", 'q', nullptr, OptionGroup::kGeneral, kPlanning, "no progress, no warnings",

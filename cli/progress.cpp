@@ -12,6 +12,7 @@
 
 #include "commands.h"
 #include "ssgi/error.h"
+#include "ssgi/log.h"
 #include "ssgi/temporary_files.h"
 #include "ssgi/threads.h"
 
@@ -82,6 +83,8 @@ int run_with_progress(const CommonOptions& o) {
   install_log_handler(o.verbose, o.quiet);
   warn_about_options(o);
   const ssgi::ThreadLimit threads(o.threads);
+  ssgi::log_info("threads: " + std::to_string(threads.budget().threads) + " (" +
+                 threads.budget().source + ")");
   ssgi::RunOptions run = o.run;
   run.write.provenance.emplace_back("ssgi:commandLine", o.command_line);
 

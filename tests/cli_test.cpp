@@ -1104,6 +1104,36 @@ TEST_F(Cli, PresetsSetTheirSettingsAndGivenOptionsOverrideThem) {
                      "unknown --preset 'best' (draft, default, final)");
 }
 
+TEST_F(Cli, ThreadsComeFromTheOptionElseTheSchedulersAllocation) {
+  // A farm task gets its allocation, not the node's cores: --threads, else Slurm's
+  // SLURM_CPUS_PER_TASK, else OpenCue's CUE_THREADS (then the cgroup quota, the CPUs allowed).
+  const std::string in = testdata("sample/sample.0001.exr");
+  auto threads_of = [&](const std::vector<std::string>& extra) {
+    std::vector<std::string> args = {"info", in, "--json"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const CliResult r = run_ssgi(args);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return nlohmann::json::parse(r.out, nullptr, false)["threads"];
+  };
+  ::setenv("SLURM_CPUS_PER_TASK", "3", 1);
+  nlohmann::json t = threads_of({});
+  EXPECT_EQ(t["count"], 3);
+  EXPECT_EQ(t["from"], "SLURM_CPUS_PER_TASK");
+  t = threads_of({"--threads", "5"});
+  EXPECT_EQ(t["count"], 5);
+  EXPECT_EQ(t["from"], "--threads");
+  ::setenv("SLURM_CPUS_PER_TASK", "none", 1);  // not a count: the next source
+  ::setenv("CUE_THREADS", "2", 1);
+  t = threads_of({});
+  EXPECT_EQ(t["count"], 2);
+  EXPECT_EQ(t["from"], "CUE_THREADS");
+  ::unsetenv("SLURM_CPUS_PER_TASK");
+  ::unsetenv("CUE_THREADS");
+  t = threads_of({});
+  EXPECT_GE(t["count"].get<int>(), 1);
+  EXPECT_NE(t["from"], "--threads");
+}
+
 TEST_F(Cli, HelpListsEachSubcommandsOwnOptionsWithTheDefaultsTheyRunWith) {
   // One option table: each --help lists the options its subcommand takes, with the defaults
   // that subcommand starts from.

@@ -1,17 +1,33 @@
-// Limits the library's worker threads for as long as the object lives (--threads).
+// The library's worker threads: how many, decided from --threads, the scheduler's allocation
+// or the machine, and a limit that holds for as long as an object lives.
 #pragma once
 
 #include <memory>
+#include <string>
 
 namespace ssgi {
 
+// How many worker threads a run uses, and what decided it.
+struct ThreadBudget {
+  int threads = 1;
+  std::string source;  // "--threads", "SLURM_CPUS_PER_TASK", "CUE_THREADS", "cgroup cpu.max", ...
+};
+
+// `requested` > 0 (--threads) wins; else the scheduler's allocation: Slurm's
+// SLURM_CPUS_PER_TASK, OpenCue's CUE_THREADS, the cgroup's CPU quota (cgroup v2 cpu.max, v1
+// cpu.cfs_quota_us over cpu.cfs_period_us, rounded up); else the CPUs this process may run on.
+// A farm node's core count is not what a task was given.
+ThreadBudget thread_budget(int requested);
+
 class ThreadLimit {
  public:
-  // `threads` > 0 caps the library's parallelism (and OIIO's and OpenEXR's); 0 leaves it.
-  explicit ThreadLimit(int threads);
+  // Caps the library's parallelism (and OIIO's and OpenEXR's) at thread_budget(requested).
+  explicit ThreadLimit(int requested);
   ~ThreadLimit();
   ThreadLimit(const ThreadLimit&) = delete;
   ThreadLimit& operator=(const ThreadLimit&) = delete;
+
+  const ThreadBudget& budget() const;
 
  private:
   struct Impl;
