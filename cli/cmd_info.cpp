@@ -26,20 +26,6 @@ void print_help() {
       options_help(kInfoCommand).c_str());
 }
 
-// "1-6", "1-9x2", "1,4,7-9": frames as compact ranges.
-std::string frame_ranges(const std::vector<int>& frames) {
-  std::string out;
-  for (std::size_t i = 0; i < frames.size();) {
-    std::size_t j = i;
-    while (j + 1 < frames.size() && frames[j + 1] == frames[j] + 1) ++j;
-    if (!out.empty()) out += ",";
-    out += std::to_string(frames[i]);
-    if (j > i) out += "-" + std::to_string(frames[j]);
-    i = j + 1;
-  }
-  return out;
-}
-
 std::string window_string(const ssgi::Box2i& b) {
   return "(" + std::to_string(b.x0) + "," + std::to_string(b.y0) + ")-(" +
          std::to_string(b.x1 - 1) + "," + std::to_string(b.y1 - 1) + ")";

@@ -108,6 +108,21 @@ int run_with_progress(const CommonOptions& o) {
       });
   if (!o.stats.empty()) write_stats(o.stats, o, report);
   const int failed = report.failed();
+  if (!o.quiet) {
+    // The last line: how many frames were written, and which failed.
+    const int attempted = static_cast<int>(report.frames.size()), written = attempted - failed;
+    std::string line = "ssgi: " + std::to_string(written) + " of " + std::to_string(report.total) +
+                       " frames written";
+    if (failed > 0) {
+      std::vector<int> which;
+      for (const ssgi::FrameReport& f : report.frames)
+        if (!f.ok) which.push_back(f.frame);
+      line += ", " + std::to_string(failed) + " failed (" + frame_ranges(which) + ")";
+    }
+    if (attempted < report.total)
+      line += ", " + std::to_string(report.total - attempted) + " not attempted (--fail-fast)";
+    std::fprintf(stderr, "%s\n", line.c_str());
+  }
   if (failed == 0) return kExitOk;
   // --fail-fast stopped at the frame that failed: its status says why.
   if (o.run.fail_fast) return exit_code_for(report.frames.back().error_kind);

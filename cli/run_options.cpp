@@ -290,6 +290,19 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
   return o;
 }
 
+std::string frame_ranges(const std::vector<int>& frames) {
+  std::string out;
+  for (std::size_t i = 0; i < frames.size();) {
+    std::size_t j = i;
+    while (j + 1 < frames.size() && frames[j + 1] == frames[j] + 1) ++j;
+    if (!out.empty()) out += ",";
+    out += std::to_string(frames[i]);
+    if (j > i) out += "-" + std::to_string(frames[j]);
+    i = j + 1;
+  }
+  return out;
+}
+
 void install_log_handler(bool verbose, bool quiet) {
   ssgi::set_log_handler([verbose, quiet](ssgi::LogLevel level, const std::string& msg) {
     if (quiet) return;

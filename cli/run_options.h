@@ -4,6 +4,7 @@
 
 #include <set>
 #include <string>
+#include <vector>
 
 #include "option_table.h"
 #include "ssgi/run.h"
@@ -27,6 +28,9 @@ struct CommonOptions {
 // `sub` takes. `need_output` makes -o required. Throws ssgi::Error(kUsage) on a bad option or
 // value.
 CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool need_output);
+
+// "1-6", "1,4,7-9": frames (ascending) as compact ranges.
+std::string frame_ranges(const std::vector<int>& frames);
 
 // Sets up logging to stderr: warnings always (unless quiet), info lines when verbose.
 void install_log_handler(bool verbose, bool quiet);

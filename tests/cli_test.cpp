@@ -202,10 +202,14 @@ class Cli : public ::testing::Test {
   }
 
   // Asserts a failure reported as exactly the one line `ssgi: error: <file>: <what>`, with
-  // `what` containing `phrase`.
+  // `what` containing `phrase`; when it was a frame's (the run got to its frames), followed by
+  // the run's summary saying that no frame was written.
   static void expect_one_error(const CliResult& r, const std::string& file,
                                const std::string& phrase) {
-    const std::vector<std::string> lines = r.err_lines();
+    std::vector<std::string> lines = r.err_lines();
+    if (lines.size() == 2 && lines[1].rfind("ssgi: 0 of ", 0) == 0 &&
+        lines[1].find(" frames written, ") != std::string::npos)
+      lines.pop_back();
     ASSERT_EQ(lines.size(), 1u) << r.err;
     const std::string head = "ssgi: error: " + file + ": ";
     EXPECT_EQ(lines[0].rfind(head, 0), 0u) << lines[0];
@@ -382,8 +386,9 @@ TEST_F(Cli, RunWritesOurLayersInputChannelsAndMetadata) {
   const CliResult r = run_ssgi({"run", testdata("sample/sample.####.exr"), "-o",
                                 path("out.####.exr"), "--rays", "2", "--seed", "7"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  // Not a terminal: one progress line per frame, nothing else.
-  EXPECT_EQ(r.err_lines().size(), 6u) << r.err;
+  // Not a terminal: one progress line per frame, then the summary.
+  EXPECT_EQ(r.err_lines().size(), 7u) << r.err;
+  EXPECT_EQ(r.err_lines().back(), "ssgi: 6 of 6 frames written");
   EXPECT_EQ(r.err_lines()[0].rfind("ssgi: frame 1 (1/6): ", 0), 0u);
   EXPECT_EQ(entries(), (std::set<std::string>{"out.0001.exr", "out.0002.exr", "out.0003.exr",
                                               "out.0004.exr", "out.0005.exr", "out.0006.exr"}));
@@ -463,8 +468,8 @@ TEST_F(Cli, HalfDatatypeAppliesToOurChannelsOnlyAndClamps) {
   const CliResult r = run_ssgi(
       {"run", path("bright.0001.exr"), "-o", path("o.exr"), "--rays", "2", "--datatype", "half"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  // One warning for the frame, counting what was clamped, then the progress line.
-  ASSERT_EQ(r.err_lines().size(), 2u) << r.err;
+  // One warning for the frame, counting what was clamped, then the progress line, the summary.
+  ASSERT_EQ(r.err_lines().size(), 3u) << r.err;
   EXPECT_EQ(r.err_lines()[0].rfind("ssgi: warning: " + path("o.exr") + ": ", 0), 0u) << r.err;
   EXPECT_NE(r.err_lines()[0].find(" values of ssgi's layers beyond the half-float range were "
                                   "clamped to +-65504"),
@@ -485,9 +490,9 @@ TEST_F(Cli, DwaCompressionWritesAndWarnsOnce) {
   const CliResult r = run_ssgi({"run", testdata("sample/sample.1-2#.exr"), "-o", path("o.####.exr"),
                                 "--rays", "2", "--compression", "dwaa:45"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  // One warning for the run (not per frame), then the two progress lines.
+  // One warning for the run (not per frame), then the two progress lines and the summary.
   const std::vector<std::string> lines = r.err_lines();
-  ASSERT_EQ(lines.size(), 3u) << r.err;
+  ASSERT_EQ(lines.size(), 4u) << r.err;
   EXPECT_EQ(lines[0],
             "ssgi: warning: DWA compression is lossy on channels named R, G, B "
             "(ssgi's outputs too)");
@@ -667,7 +672,9 @@ TEST_F(Cli, MissingFrameInRangeFailsBeforeWritingAnything) {
   ASSERT_FALSE(r.err_lines().empty());
   EXPECT_EQ(r.err_lines()[0],
             "ssgi: warning: " + testdata("bad/gap.0002.exr") + ": frame 2 is missing; skipped");
-  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 3) << r.err;  // + 2 progress lines
+  // + 2 progress lines and the summary
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 4) << r.err;
+  EXPECT_EQ(r.err_lines().back(), "ssgi: 2 of 2 frames written");
   EXPECT_EQ(entries(), (std::set<std::string>{"g.0001.exr", "g.0003.exr"}));
 }
 
@@ -719,7 +726,8 @@ TEST_F(Cli, ResolutionChangeFailsThatFrameOnly) {
   EXPECT_EQ(r.exit_code, 1);
   const std::vector<std::string> lines = r.err_lines();
   const std::string why = "display window 32x24 differs from the first frame's 48x32";
-  ASSERT_EQ(lines.size(), 3u) << r.err;
+  ASSERT_EQ(lines.size(), 4u) << r.err;
+  EXPECT_EQ(lines[3], "ssgi: 1 of 2 frames written, 1 failed (2)");
   EXPECT_EQ(lines[0], "ssgi: warning: " + testdata("bad/resize.0002.exr") + ": " + why +
                           "; left out of the temporal window");
   EXPECT_EQ(lines[1].rfind("ssgi: frame 1 (1/2): ", 0), 0u);
@@ -754,6 +762,15 @@ TEST_F(Cli, FailFastStopsAtTheFirstFrameThatFails) {
   EXPECT_FALSE(fs::exists(path("fast.0002.exr")));
   EXPECT_FALSE(fs::exists(path("fast.0003.exr")));
   expect_one_error(f, path("in.0002.exr"), "");
+  // Not quiet: the last line counts what was written, failed and not attempted.
+  std::vector<std::string> loud = {"run", path("in.####.exr"),   "--rays",
+                                   "2",   "--temporal",          "none",
+                                   "-o",  path("loud.####.exr"), "--fail-fast"};
+  const CliResult l = run_ssgi(loud);
+  EXPECT_EQ(l.exit_code, 4) << l.err;
+  ASSERT_FALSE(l.err_lines().empty());
+  EXPECT_EQ(l.err_lines().back(),
+            "ssgi: 1 of 3 frames written, 1 failed (2), 1 not attempted (--fail-fast)");
 }
 
 TEST_F(Cli, UnwritableOutputFailsOnceWithoutTemporaryFiles) {
@@ -846,9 +863,9 @@ TEST_F(Cli, InputChannelsCollidingWithOursAreKeptAsInputDot) {
   const CliResult r =
       run_ssgi({"run", path("in.####.exr"), "-o", path("out.####.exr"), "--rays", "2"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  // One warning for the whole run, then the two progress lines.
+  // One warning for the whole run, then the two progress lines and the summary.
   const std::vector<std::string> lines = r.err_lines();
-  ASSERT_EQ(lines.size(), 3u) << r.err;
+  ASSERT_EQ(lines.size(), 4u) << r.err;
   EXPECT_EQ(lines[0], "ssgi: warning: " + path("in.0001.exr") +
                           ": input channels that share a name with ssgi's are kept as "
                           "input.<name> (e.g. input.R)");
@@ -1041,7 +1058,7 @@ TEST_F(Cli, FrameWithoutSurfacesWarnsAndSaysWhy) {
                                 "--rays", "2", "--temporal", "none", "--depth-kind", "negative"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::vector<std::string> lines = r.err_lines();
-  ASSERT_EQ(lines.size(), 2u) << r.err;  // the warning and the progress line
+  ASSERT_EQ(lines.size(), 3u) << r.err;  // the warning, the progress line, the summary
   EXPECT_EQ(lines[0], "ssgi: warning: " + testdata("sample/sample.0001.exr") + ": 0 of 6144 " +
                           "pixels have a surface, the rest get no GI: its depths are positive " +
                           "but --depth-kind is negative");
@@ -1049,7 +1066,7 @@ TEST_F(Cli, FrameWithoutSurfacesWarnsAndSaysWhy) {
   const CliResult ok = run_ssgi({"run", testdata("sample/sample.0001.exr"), "-o", path("p.exr"),
                                  "--rays", "2", "--temporal", "none", "--depth-kind", "planar"});
   ASSERT_EQ(ok.exit_code, 0) << ok.err;
-  EXPECT_EQ(ok.err_lines().size(), 1u) << ok.err;
+  EXPECT_EQ(ok.err_lines().size(), 2u) << ok.err;  // the progress line and the summary
 }
 
 TEST_F(Cli, OneChannelLayerIsFoundByItsName) {

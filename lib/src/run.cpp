@@ -78,6 +78,7 @@ RunReport run_sequence(const RunOptions& options, const FrameCallback& on_frame)
   detail::FrameSource source(seq, options.input, pipeline);
   RunReport report;
   const int total = static_cast<int>(seq.frames.size());
+  report.total = total;
   for (int i = 0; i < total; ++i) {
     const auto start = std::chrono::steady_clock::now();
     FrameReport fr;

@@ -34,7 +34,8 @@ struct FrameReport {
 };
 
 struct RunReport {
-  std::vector<FrameReport> frames;
+  std::vector<FrameReport> frames;  // those attempted, in order
+  int total = 0;                    // the frames the run was to write
   int failed() const;
 };
 
