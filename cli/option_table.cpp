@@ -226,12 +226,6 @@ const char* subcommand_name(Subcommand s) {
 
 const std::vector<OptionSpec>& option_table() { return kTable; }
 
-const OptionSpec& option_spec(int id) {
-  for (const OptionSpec& o : kTable)
-    if (o.id == id) return o;
-  throw ssgi::Error(ssgi::ErrorKind::kInternal, {}, "no option with id " + std::to_string(id));
-}
-
 ssgi::RunOptions subcommand_defaults(Subcommand s) {
   ssgi::RunOptions d;
   ssgi::apply_preset("default", &d.gi);

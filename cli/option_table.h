@@ -97,7 +97,4 @@ std::string options_help(Subcommand s);
 // subcommand, or unknown.
 [[noreturn]] void throw_unknown_option(Subcommand s, const std::string& written);
 
-// The entry for getopt's value `id`.
-const OptionSpec& option_spec(int id);
-
 }  // namespace ssgi_cli

@@ -89,7 +89,6 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
                                     : std::string(argv[optind - 1]));
     }
     given.emplace_back(c, optarg ? optarg : "");
-    o.given.insert(option_spec(c).name);
     if (c == kPreset) o.preset = optarg;
   }
   if (sub & (kRunCommand | kInfoCommand)) ssgi::apply_preset(o.preset, &gi);

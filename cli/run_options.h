@@ -2,7 +2,6 @@
 // parsed with getopt_long from option_table.h.
 #pragma once
 
-#include <set>
 #include <string>
 #include <vector>
 
@@ -21,7 +20,6 @@ struct CommonOptions {
   bool json = false;               // --json (ssgi info)
   std::string stats;               // --stats FILE.json (ssgi run)
   std::string preset = "default";  // --preset
-  std::set<std::string> given;     // the long names of the options given, e.g. "denoise"
 };
 
 // Parses argv (argv[0] is the subcommand) over subcommand_defaults(sub), with the options

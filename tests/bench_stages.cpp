@@ -103,30 +103,40 @@ void BM_IndirectLight(benchmark::State& state) {
 
 // The kernels alone, on a million values in cache-sized batches: argument 0 the scalar twin,
 // 1 the SIMD version (the same bits; the ratio is the kernel's own speed-up).
-void BM_RangeWeightsKernel(benchmark::State& state) {
-  constexpr std::size_t kBatch = 4096;
-  ssgi::detail::RangeBatch batch;
-  batch.resize(kBatch);
-  for (std::size_t k = 0; k < kBatch; ++k) {
-    const float a = 0.001f * static_cast<float>(k % 977);
-    const ssgi::detail::Surface p{2.0f + a, 0.6f, 0.0f, -0.8f, 0.01f, -0.02f};
-    const ssgi::detail::Surface q{2.0f + 1.01f * a, 0.6f - a, 0.1f, -0.79f, 0, 0};
-    batch.set(k, p, q, 1.0f, -1.0f);
+// The joint bilateral filter's row kernel (5x5, the default at the pyramid's coarsest level)
+// over a 480x270 level of a tilted plane with depth steps and background.
+void BM_JointBilateralKernel(benchmark::State& state) {
+  constexpr int kWidth = 480, kHeight = 270, kRadius = 2;
+  const std::size_t n = static_cast<std::size_t>(kWidth) * kHeight;
+  std::vector<float> z(n), nx(n, 0.0f), ny(n, 0.6f), nz(n, -0.8f), gx(n, 0.01f), gy(n, -0.02f);
+  std::vector<float> light(3 * n), out(3 * static_cast<std::size_t>(kWidth));
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  for (std::size_t i = 0; i < n; ++i) {
+    const float r = u(rng);
+    z[i] = r < 0.03f ? ssgi::detail::kInf
+                     : 2.0f + 0.001f * static_cast<float>(i % kWidth) + (r < 0.08f ? 0.5f : 0.0f);
+    for (int c = 0; c < 3; ++c) light[c * n + i] = u(rng);
   }
+  const ssgi::detail::GuidePlanes g{z.data(),  nx.data(), ny.data(), nz.data(),
+                                    gx.data(), gy.data(), kWidth,    kHeight};
+  const float* const planes[3] = {light.data(), light.data() + n, light.data() + 2 * n};
+  float* const rows[3] = {out.data(), out.data() + kWidth, out.data() + 2 * kWidth};
+  const float taps[kRadius + 1] = {1.0f, 0.8f, 0.41f};
   const ssgi::detail::RangeTerms terms = ssgi::detail::make_range_terms({});
-  std::vector<float> out(kBatch);
   for (auto _ : state) {
-    for (int r = 0; r < 256; ++r) {
+    for (int y = 0; y < kHeight; ++y) {
       if (state.range(0))
-        ssgi::detail::range_weights(batch, terms, out.data());
+        ssgi::detail::joint_bilateral_row(g, planes, y, kRadius, taps, terms, rows);
       else
-        ssgi::detail::range_weights_scalar(batch, terms, out.data());
+        ssgi::detail::joint_bilateral_row_scalar(g, planes, y, kRadius, taps, terms, rows);
       benchmark::DoNotOptimize(out.data());
     }
   }
-  state.counters["weights/s"] =
-      benchmark::Counter(256.0 * kBatch, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["pixels/s"] =
+      benchmark::Counter(static_cast<double>(n), benchmark::Counter::kIsIterationInvariantRate);
 }
+
 // One side of a slice after another over a 480x270 mesh of a tilted plane with holes, in
 // random directions: the tracer's whole per-sample work but the bookkeeping of hits.
 void BM_MarchSideKernel(benchmark::State& state) {
@@ -177,7 +187,7 @@ void BM_MarchSideKernel(benchmark::State& state) {
 
 }  // namespace
 
-BENCHMARK(BM_RangeWeightsKernel)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_JointBilateralKernel)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_MarchSideKernel)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Read)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ReflectedAndClosure)->Unit(benchmark::kMillisecond);

@@ -74,20 +74,6 @@ struct RangeWeightV {
   }
 };
 
-void RangeWeightsSimd(const RangeBatch& b, const RangeTerms& terms, float* out) {
-  const hn::ScalableTag<float> d;
-  const RangeWeightV<decltype(d)> weight(terms);
-  const std::size_t n = b.size(), lanes = hn::Lanes(d);
-  std::size_t k = 0;
-  for (; k + lanes <= n; k += lanes) {
-    auto load = [&](const std::vector<float>& v) { return hn::LoadU(d, &v[k]); };
-    hn::StoreU(weight(load(b.pz), load(b.pnx), load(b.pny), load(b.pnz), load(b.pgx), load(b.pgy),
-                      load(b.qz), load(b.qnx), load(b.qny), load(b.qnz), load(b.dx), load(b.dy)),
-               d, out + k);
-  }
-  for (; k < n; ++k) out[k] = range_weight_at(b, k, terms);
-}
-
 // axis_gradient on lanes.
 template <class D, class V = hn::Vec<D>>
 V AxisGradient(D d, V before2, V before1, V z0, V after1, V after2) {
@@ -411,7 +397,6 @@ HWY_AFTER_NAMESPACE();
 namespace ssgi {
 namespace detail {
 
-HWY_EXPORT(RangeWeightsSimd);
 HWY_EXPORT(UpsampleRowSimd);
 HWY_EXPORT(DepthGradientRow);
 HWY_EXPORT(DownsampleRowSimd);
@@ -423,10 +408,6 @@ bool simd_forced_scalar() {
     return v != nullptr && std::string(v) == "scalar";
   }();
   return forced;
-}
-
-void range_weights_scalar(const RangeBatch& b, const RangeTerms& terms, float* out) {
-  for (std::size_t k = 0; k < b.size(); ++k) out[k] = range_weight_at(b, k, terms);
 }
 
 void depth_gradient_row_scalar(const float* z, int w, int h, int y, float* gx, float* gy) {
@@ -488,14 +469,6 @@ void upsample_row(const GuidePlanes& fine, int y, const GuidePlanes& coarse,
     return;
   }
   HWY_DYNAMIC_DISPATCH(UpsampleRowSimd)(fine, y, coarse, coarse_light, own, terms, out);
-}
-
-void range_weights(const RangeBatch& b, const RangeTerms& terms, float* out) {
-  if (simd_forced_scalar() || terms.integer_normal_power < 0) {
-    range_weights_scalar(b, terms, out);
-    return;
-  }
-  HWY_DYNAMIC_DISPATCH(RangeWeightsSimd)(b, terms, out);
 }
 
 }  // namespace detail

@@ -1,8 +1,8 @@
-// The denoiser's kernels: the range weight (how much a sample belongs to a pixel's surface) on
-// a batch of pixel-sample pairs, and a row at a time, the depth gradients of a level's guides
-// and joint bilateral upsampling. Each SIMD kernel does every pixel's arithmetic in its scalar
-// twin's order (no fused multiply-add, the same polynomials), so the two agree bit for bit on
-// every target, and SSGI_SIMD=scalar switches to the twins.
+// The denoiser's kernels on the range weight (how much a sample belongs to a pixel's surface),
+// a row at a time: the depth gradients of a level's guides, halving a level, the joint
+// bilateral filter and joint bilateral upsampling. Each SIMD kernel does every pixel's arithmetic
+// in its scalar twin's order (no fused multiply-add, the same polynomials), so the two agree bit
+// for bit on every target, and SSGI_SIMD=scalar switches to the twins.
 #pragma once
 
 #include <algorithm>
@@ -11,7 +11,6 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
-#include <vector>
 
 #include "ssgi/settings.h"
 
@@ -97,44 +96,6 @@ inline __attribute__((always_inline)) float range_weight(const Surface& p, const
   // An unknown (zero) normal leaves the decision to depth alone.
   return w;
 }
-
-// Pairs (p, q, dx, dy) as a structure of arrays.
-struct RangeBatch {
-  std::vector<float> pz, pnx, pny, pnz, pgx, pgy, qz, qnx, qny, qnz, dx, dy;
-
-  std::size_t size() const { return size_; }
-  // Room for n pairs (contents unspecified until set).
-  void resize(std::size_t n) {
-    size_ = n;
-    for (std::vector<float>* v : fields())
-      if (v->size() < n) v->resize(n);
-  }
-  void set(std::size_t k, const Surface& p, const Surface& q, float x, float y) {
-    pz[k] = p.z, pnx[k] = p.nx, pny[k] = p.ny, pnz[k] = p.nz, pgx[k] = p.gx, pgy[k] = p.gy;
-    qz[k] = q.z, qnx[k] = q.nx, qny[k] = q.ny, qnz[k] = q.nz, dx[k] = x, dy[k] = y;
-  }
-
- private:
-  std::vector<std::vector<float>*> fields() {
-    return {&pz, &pnx, &pny, &pnz, &pgx, &pgy, &qz, &qnx, &qny, &qnz, &dx, &dy};
-  }
-  std::size_t size_ = 0;
-};
-
-// range_weight of pair k of `batch`.
-inline float range_weight_at(const RangeBatch& b, std::size_t k, const RangeTerms& terms) {
-  const Surface p{b.pz[k], b.pnx[k], b.pny[k], b.pnz[k], b.pgx[k], b.pgy[k]};
-  const Surface q{b.qz[k], b.qnx[k], b.qny[k], b.qnz[k], 0, 0};
-  return range_weight(p, q, b.dx[k], b.dy[k], terms);
-}
-
-// out[k] = range_weight of pair k, for every pair of the batch: with the widest SIMD target
-// the CPU has (Highway's dynamic dispatch) unless SSGI_SIMD=scalar, or the power is not a
-// whole number (std::pow has no SIMD twin here).
-void range_weights(const RangeBatch& batch, const RangeTerms& terms, float* out);
-
-// The scalar twin of range_weights, for the tests.
-void range_weights_scalar(const RangeBatch& batch, const RangeTerms& terms, float* out);
 
 // Of two one-sided depth differences, the smaller if they agree in sign (a plane, perhaps
 // with a depth edge on one side), else 0 (a ridge or a thin feature, not a plane). NaN when
@@ -384,7 +345,8 @@ void downsample_row_scalar(const GuidePlanes& fine, const float* const fine_ligh
 // coarse samples with bilinear weights times their range_weight, plus kOwnValueWeight of its
 // own value own[c][x], clamped to the range of the values it averages; out[c][x] for x in
 // [0, fine.width), 0 where the fine pixel has no surface (own, and the coarse light where a
-// coarse sample has a surface, must be finite). SIMD on the same terms as range_weights.
+// coarse sample has a surface, must be finite). SIMD unless SSGI_SIMD=scalar or the normal power is
+// not a whole number (std::pow has no SIMD twin here).
 void upsample_row(const GuidePlanes& fine, int y, const GuidePlanes& coarse,
                   const float* const coarse_light[3], const float* const own[3],
                   const RangeTerms& terms, float* const out[3]);
