@@ -60,6 +60,9 @@ enum OptionId : int {
   kNoPassthrough,
   kLayerPrefix,
   kFailFast,
+  kSkipExisting,
+  kNoClobber,
+  kProgress,
 };
 
 enum class OptionGroup { kInput, kGi, kOutput, kGeneral };

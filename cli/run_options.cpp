@@ -259,6 +259,19 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
       case kFailFast:
         o.run.fail_fast = true;
         break;
+      case kSkipExisting:
+        o.run.skip_existing = true;
+        break;
+      case kNoClobber:
+        o.run.no_clobber = true;
+        break;
+      case kProgress: {
+        const std::string mode = a;
+        if (mode != "auto" && mode != "lines" && mode != "openjd" && mode != "deadline")
+          ssgi::throw_usage("--progress must be auto, lines, openjd or deadline");
+        o.progress = mode;
+        break;
+      }
       case kLayerPrefix:
         o.run.write.layer_prefix = ssgi::parse_layer_prefix(a);
         break;
@@ -302,13 +315,17 @@ std::string frame_ranges(const std::vector<int>& frames) {
   return out;
 }
 
-void install_log_handler(bool verbose, bool quiet) {
-  ssgi::set_log_handler([verbose, quiet](ssgi::LogLevel level, const std::string& msg) {
+void install_log_handler(bool verbose, bool quiet,
+                         std::function<void(const std::string&)> print_line) {
+  if (!print_line)
+    print_line = [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); };
+  ssgi::set_log_handler([verbose, quiet, print_line = std::move(print_line)](
+                            ssgi::LogLevel level, const std::string& msg) {
     if (quiet) return;
     if (level == ssgi::LogLevel::kWarning)
-      std::fprintf(stderr, "ssgi: warning: %s\n", msg.c_str());
+      print_line("ssgi: warning: " + msg);
     else if (verbose)
-      std::fprintf(stderr, "ssgi: %s\n", msg.c_str());
+      print_line("ssgi: " + msg);
   });
 }
 

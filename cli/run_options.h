@@ -2,6 +2,7 @@
 // parsed with getopt_long from option_table.h.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,7 @@ struct CommonOptions {
   bool json = false;               // --json (ssgi info)
   std::string stats;               // --stats FILE.json (ssgi run)
   std::string preset = "default";  // --preset
+  std::string progress = "auto";   // --progress auto|lines|openjd|deadline
 };
 
 // Parses argv (argv[0] is the subcommand) over subcommand_defaults(sub), with the options
@@ -30,8 +32,10 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
 // "1-6", "1,4,7-9": frames (ascending) as compact ranges.
 std::string frame_ranges(const std::vector<int>& frames);
 
-// Sets up logging to stderr: warnings always (unless quiet), info lines when verbose.
-void install_log_handler(bool verbose, bool quiet);
+// Sets up logging: warnings always (unless quiet), info lines when verbose, each line given to
+// `print_line` (default: printed on stderr).
+void install_log_handler(bool verbose, bool quiet,
+                         std::function<void(const std::string&)> print_line = {});
 
 // Warnings about option choices (lossy compression), once the log handler is installed.
 void warn_about_options(const CommonOptions& options);

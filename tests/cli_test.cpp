@@ -4,6 +4,7 @@
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <poll.h>
+#include <pty.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -1232,8 +1233,9 @@ TEST_F(Cli, StatsRecordEachFramesTimingsAndTheSettings) {
   // No temporary file left beside it; info refuses the option.
   EXPECT_EQ(entries(),
             (std::set<std::string>{"o.0001.exr", "o.0002.exr", "o.0003.exr", "stats.json"}));
-  expect_usage_error(run_ssgi({"info", testdata("sample/sample.0001.exr"), "--stats", "s.json"}),
-                     "info", "'--stats' is not an option of ssgi info (it is of ssgi run)");
+  expect_usage_error(
+      run_ssgi({"info", testdata("sample/sample.0001.exr"), "--stats", "s.json"}), "info",
+      "'--stats' is not an option of ssgi info (it is of ssgi run or ssgi reference)");
 }
 
 TEST_F(Cli, SignalsStopTheRunRemoveTemporaryFilesAndLeaveFinishedFramesWhole) {
@@ -1329,6 +1331,186 @@ TEST_F(Cli, ScalarTwinsGiveTheSameBitsAsSimd) {
     const std::vector<float>& ind = a.planes.at("indirect.R");
     EXPECT_GT(*std::max_element(ind.begin(), ind.end()), 0.0f);
   }
+}
+
+// The channels and header of two EXRs that must be the same frame: every channel's values
+// equal, bit for bit.
+void expect_same_pixels(const std::string& a, const std::string& b) {
+  const ExrImage x = read_exr(a), y = read_exr(b);
+  ASSERT_EQ(x.channel_names(), y.channel_names()) << a << " vs " << b;
+  for (const auto& [name, plane] : x.planes) EXPECT_EQ(plane, y.planes.at(name)) << name;
+}
+
+TEST_F(Cli, SkipExistingKeepsWholeMatchingOutputsAndMakesTheRest) {
+  // A whole run, then a resume over its outputs: frame 1 kept as it is, frame 2 truncated (a
+  // half-copied file), frame 3 made with another seed. The resume keeps 1 and makes 2 and 3
+  // again, the same bits as the whole run.
+  const std::string in = testdata("sample/sample.1-3#.exr");
+  const std::vector<std::string> base = {"run", in, "--preset", "draft", "--no-passthrough"};
+  std::vector<std::string> whole = base;
+  for (const char* a : {"-q", "-o"}) whole.push_back(a);
+  whole.push_back(path("whole.####.exr"));
+  ASSERT_EQ(run_ssgi(whole).exit_code, 0);
+  for (const char* f : {"0001", "0002"})
+    fs::copy_file(path(std::string("whole.") + f + ".exr"), path(std::string("o.") + f + ".exr"));
+  {
+    const std::string bytes = file_bytes(path("o.0002.exr"));
+    std::ofstream(path("o.0002.exr"), std::ios::binary | std::ios::trunc)
+        << bytes.substr(0, bytes.size() * 2 / 3);
+  }
+  std::vector<std::string> other = base;
+  for (const char* a : {"--frames", "3", "--seed", "7", "-q", "-o"}) other.push_back(a);
+  other.push_back(path("o.####.exr"));
+  ASSERT_EQ(run_ssgi(other).exit_code, 0);
+  const std::string kept = file_bytes(path("o.0001.exr"));
+
+  std::vector<std::string> resume = base;
+  for (const char* a : {"--skip-existing", "-v", "--stats"}) resume.push_back(a);
+  resume.push_back(path("stats.json"));
+  resume.push_back("-o");
+  resume.push_back(path("o.####.exr"));
+  const CliResult r = run_ssgi(resume);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // Frame 1 untouched (a rewrite would differ: the command line is in the header).
+  EXPECT_EQ(file_bytes(path("o.0001.exr")), kept);
+  for (const char* f : {"0002", "0003"})
+    expect_same_pixels(path(std::string("o.") + f + ".exr"),
+                       path(std::string("whole.") + f + ".exr"));
+  const std::string& err = r.err;
+  EXPECT_NE(err.find(path("o.0002.exr") + ": exists but is made again: incomplete or damaged"),
+            std::string::npos)
+      << err;
+  EXPECT_NE(err.find(path("o.0003.exr") + ": exists but is made again: ssgi:settings is '"),
+            std::string::npos)
+      << err;
+  EXPECT_NE(err.find("ssgi: frame 1 (1/3): " + path("o.0001.exr") + " is there already, skipped"),
+            std::string::npos)
+      << err;
+  EXPECT_EQ(r.err_lines().back(), "ssgi: 2 of 3 frames written, 1 skipped (already written)");
+  std::ifstream file(path("stats.json"));
+  const nlohmann::json stats = nlohmann::json::parse(file, nullptr, false);
+  ASSERT_FALSE(stats.is_discarded());
+  EXPECT_EQ(stats["summary"]["frames"], 3);
+  EXPECT_EQ(stats["summary"]["written"], 2);
+  EXPECT_EQ(stats["summary"]["skipped"], 1);
+  EXPECT_EQ(stats["summary"]["failed"], 0);
+  EXPECT_EQ(stats["frames"][0]["skipped"], true);
+  EXPECT_GT(stats["summary"]["total"]["gi_ms"].get<double>(), 0.0);
+
+  // Now everything is there and matches: nothing is made.
+  const CliResult again = run_ssgi(resume);
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_EQ(again.err_lines().back(), "ssgi: 0 of 3 frames written, 3 skipped (already written)");
+  EXPECT_EQ(file_bytes(path("o.0001.exr")), kept);
+}
+
+TEST_F(Cli, NoClobberRefusesBeforeComputingAnything) {
+  const std::string in = testdata("sample/sample.1-3#.exr");
+  const std::vector<std::string> args = {"run",          in,   "--preset",        "draft", "-q",
+                                         "--no-clobber", "-o", path("o.####.exr")};
+  ASSERT_EQ(run_ssgi(args).exit_code, 0);  // nothing in the way
+  const std::string first = file_bytes(path("o.0001.exr"));
+  fs::remove(path("o.0003.exr"));
+  const CliResult r = run_ssgi(args);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.err_lines().front(), "ssgi: error: " + path("o.0001.exr") +
+                                       ": exists (as do 1 more outputs) and --no-clobber does "
+                                       "not overwrite");
+  EXPECT_EQ(file_bytes(path("o.0001.exr")), first);
+  EXPECT_FALSE(fs::exists(path("o.0003.exr")));  // refused before any frame was computed
+  EXPECT_EQ(entries(), (std::set<std::string>{"o.0001.exr", "o.0002.exr"}));
+  // With --skip-existing the two reusable outputs are no obstacle: frame 3 is made.
+  std::vector<std::string> resume = args;
+  resume.push_back("--skip-existing");
+  const CliResult ok = run_ssgi(resume);
+  EXPECT_EQ(ok.exit_code, 0) << ok.err;
+  EXPECT_TRUE(fs::exists(path("o.0003.exr")));
+  EXPECT_EQ(file_bytes(path("o.0001.exr")), first);
+}
+
+TEST_F(Cli, ProgressForOpenJobDescriptionAndDeadlineGoesToStdout) {
+  // Frame 2 of 3 is broken: the lines say so, and openjd hears why the run failed.
+  for (int f = 1; f <= 3; ++f) {
+    const std::string name = "in.000" + std::to_string(f) + ".exr";
+    if (f == 2)
+      std::ofstream(path(name)) << "not an image";
+    else
+      fs::copy_file(testdata("sample/sample.000" + std::to_string(f) + ".exr"), path(name));
+  }
+  const std::vector<std::string> args = {
+      "run", path("in.####.exr"), "--preset", "draft", "--temporal", "none", "-q", "--progress"};
+  std::vector<std::string> openjd = args;
+  for (const char* a : {"openjd", "-o"}) openjd.push_back(a);
+  openjd.push_back(path("a.####.exr"));
+  const CliResult j = run_ssgi(openjd);
+  EXPECT_EQ(j.exit_code, 1);
+  EXPECT_EQ(j.out,
+            "openjd_status: ssgi: 3 frames to write\n"
+            "openjd_progress: 0\n"
+            "openjd_progress: 33.3\n"
+            "openjd_status: frame 1 written (1/3)\n"
+            "openjd_progress: 66.7\n"
+            "openjd_status: frame 2 failed (2/3)\n"
+            "openjd_progress: 100.0\n"
+            "openjd_status: frame 3 written (3/3)\n"
+            "openjd_fail: ssgi: 2 of 3 frames written, 1 failed (2)\n");
+  expect_one_error(j, path("in.0002.exr"), "");  // -q: only the error on stderr
+
+  std::vector<std::string> deadline = args;
+  for (const char* a : {"deadline", "-o"}) deadline.push_back(a);
+  deadline.push_back(path("b.####.exr"));
+  const CliResult d = run_ssgi(deadline);
+  EXPECT_EQ(d.exit_code, 1);
+  EXPECT_EQ(d.out, "Progress: 0%\nProgress: 33%\nProgress: 66%\nProgress: 100%\n");
+
+  // An error that stops the whole run before any frame.
+  const CliResult none =
+      run_ssgi({"run", path("nothing.####.exr"), "-o", path("c.####.exr"), "--progress", "openjd"});
+  EXPECT_EQ(none.exit_code, 4);
+  EXPECT_EQ(none.out.rfind("openjd_fail: ", 0), 0u) << none.out;
+  EXPECT_NE(none.out.find("nothing.####.exr"), std::string::npos) << none.out;
+  expect_usage_error(run_ssgi({"run", "in.exr", "-o", "o.exr", "--progress", "bar"}), "run",
+                     "--progress must be auto, lines, openjd or deadline");
+}
+
+TEST_F(Cli, OnATerminalAProgressBarShowsFramesRateAndEta) {
+  // The child's stderr is a terminal (a pseudo-terminal this test reads).
+  std::vector<std::string> args = {
+      SSGI_BINARY, "run",  testdata("sample/sample.1-3#.exr"), "-o", path("o.####.exr"),
+      "--preset",  "draft"};
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  int master = -1;
+  const pid_t pid = ::forkpty(&master, nullptr, nullptr, nullptr);
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    ::execv(argv[0], argv.data());
+    ::_exit(127);
+  }
+  std::string screen;
+  char buf[4096];
+  for (ssize_t got; (got = ::read(master, buf, sizeof buf)) > 0;) screen.append(buf, got);
+  ::close(master);
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0) << screen;
+  // From the start, before the first frame is done; then each frame, rate and ETA; the last
+  // state stays, and the summary follows on its own line.
+  const std::size_t start =
+      screen.find("\r\033[K[------------------------] 0/3 frames  0:00 elapsed");
+  const std::size_t one = screen.find("[########----------------] 1/3 frames  ");
+  const std::size_t all = screen.find("[########################] 3/3 frames  ");
+  ASSERT_NE(start, std::string::npos) << screen;
+  ASSERT_NE(one, std::string::npos) << screen;
+  ASSERT_NE(all, std::string::npos) << screen;
+  EXPECT_LT(start, one);
+  EXPECT_LT(one, all);
+  EXPECT_NE(screen.find(" s/frame  ", one), std::string::npos) << screen;
+  EXPECT_NE(screen.find(" elapsed, ETA 0:0", one), std::string::npos) << screen;
+  EXPECT_NE(screen.find("\r\nssgi: 3 of 3 frames written\r\n", all), std::string::npos) << screen;
+  EXPECT_EQ(screen.find("ssgi: frame "), std::string::npos) << screen;  // no per-frame lines
 }
 
 }  // namespace

@@ -1,8 +1,10 @@
 // The frame loop of `ssgi run`.
 #include "ssgi/run.h"
 
+#include <algorithm>
 #include <cctype>
 #include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <map>
 #include <set>
@@ -10,6 +12,7 @@
 #include "frame_source.h"
 #include "ssgi/log.h"
 #include "ssgi/pipeline.h"
+#include "ssgi/settings.h"
 #include "ssgi/version.h"
 
 namespace ssgi {
@@ -49,6 +52,31 @@ void check_outputs(const SequenceInfo& seq, const SequencePattern& out,
   }
 }
 
+// Everything besides the version that decides an output's pixels, as text for its header:
+// the GI settings, how the input is read and how the output is written (not which frames:
+// chunks of a shot give the same frames). --skip-existing compares it with the run's.
+std::string settings_text(const RunOptions& o, const SequenceInfo& seq) {
+  std::string text;
+  const auto add = [&text](const std::string& name, const std::string& value) {
+    text += (text.empty() ? "" : "; ") + name + "=" + value;
+  };
+  for (const auto& [name, value] : describe_settings(o.gi)) add(name, value);
+  add("layout", seq.layout.preset.name);
+  for (const std::string& c : o.input.channel_overrides) add("channel", c);
+  if (!o.input.depth_kind.empty()) add("depth-kind", o.input.depth_kind);
+  if (o.input.camera.hfov_deg > 0) {
+    char fov[32];
+    std::snprintf(fov, sizeof fov, "%.17g", o.input.camera.hfov_deg);
+    add("fov", fov);
+  }
+  if (!o.input.camera.sidecar.empty()) add("camera", o.input.camera.sidecar);
+  add("compression", o.write.compression);
+  add("datatype", o.write.half ? "half" : "float");
+  add("passthrough", o.write.passthrough ? "yes" : "no");
+  if (!o.write.layer_prefix.empty()) add("layer-prefix", o.write.layer_prefix);
+  return text;
+}
+
 }  // namespace
 
 int RunReport::failed() const {
@@ -57,7 +85,13 @@ int RunReport::failed() const {
   return n;
 }
 
-RunReport run_sequence(const RunOptions& options, const FrameCallback& on_frame) {
+int RunReport::skipped() const {
+  int n = 0;
+  for (const FrameReport& f : frames) n += f.skipped ? 1 : 0;
+  return n;
+}
+
+RunReport run_sequence(const RunOptions& options, const RunCallbacks& callbacks) {
   const SequenceInfo seq = open_sequence(options.input);
   std::vector<int> frames_in_output;
   const SequencePattern out = parse_sequence_pattern(options.output, &frames_in_output);
@@ -71,13 +105,47 @@ RunReport run_sequence(const RunOptions& options, const FrameCallback& on_frame)
   const Plan& plan = pipeline.plan();
   for (const std::string& reason : plan.reasons) log_info("plan: " + reason);
 
+  // What the output's header records of how it was made; --skip-existing reads it back.
+  const std::vector<std::pair<std::string, std::string>> made_by = {
+      {"ssgi:version", version()}, {"ssgi:settings", settings_text(options, seq)}};
   WriteOptions write = options.write;
-  write.provenance.emplace_back("ssgi:version", version());
+  write.provenance.insert(write.provenance.end(), made_by.begin(), made_by.end());
   write.provenance.emplace_back("ssgi:seed", std::to_string(options.gi.seed));
 
+  // Which outputs are there already: reused (--skip-existing), or refused (--no-clobber) before
+  // anything is computed.
+  const int total = static_cast<int>(seq.frames.size());
+  std::vector<char> reuse(total, 0);
+  if (options.skip_existing || options.no_clobber) {
+    std::vector<std::string> in_the_way;
+    for (int i = 0; i < total; ++i) {
+      const std::string path = out.path_for(seq.frames[i]);
+      std::error_code ec;
+      if (!fs::exists(fs::symlink_status(path, ec))) continue;
+      if (options.skip_existing) {
+        const std::string why_not = why_not_reusable(path, made_by);
+        if (why_not.empty()) {
+          reuse[i] = 1;
+          continue;
+        }
+        log_info(path + ": exists but is made again: " + why_not);
+      }
+      if (options.no_clobber) in_the_way.push_back(path);
+    }
+    if (!in_the_way.empty())
+      throw Error(ErrorKind::kUsage, in_the_way.front(),
+                  "exists" +
+                      (in_the_way.size() > 1
+                           ? " (as do " + std::to_string(in_the_way.size() - 1) + " more outputs)"
+                           : std::string()) +
+                      " and --no-clobber does not overwrite" +
+                      (options.skip_existing ? " what --skip-existing cannot reuse" : ""));
+  }
+
+  if (callbacks.on_start)
+    callbacks.on_start(total, static_cast<int>(std::count(reuse.begin(), reuse.end(), 1)));
   detail::FrameSource source(seq, options.input, pipeline);
   RunReport report;
-  const int total = static_cast<int>(seq.frames.size());
   report.total = total;
   for (int i = 0; i < total; ++i) {
     const auto start = std::chrono::steady_clock::now();
@@ -85,11 +153,18 @@ RunReport run_sequence(const RunOptions& options, const FrameCallback& on_frame)
     fr.frame = seq.frames[i];
     fr.input = seq.pattern.path_for(fr.frame);
     fr.output = out.path_for(fr.frame);
+    if (reuse[i]) {
+      fr.ok = fr.skipped = true;
+      report.frames.push_back(fr);
+      if (callbacks.on_frame) callbacks.on_frame(report.frames.back(), i + 1, total);
+      continue;
+    }
     try {
       detail::FrameSource::Result lit = source.get(fr.frame);
       fr.read_ms = source.read_ms();
       fr.gi_ms = source.gi_ms();
       const GBuffer& g = *lit.g;
+      fr.sanitized = g.sanitized;
       const auto composite_start = std::chrono::steady_clock::now();
       FrameResult result = pipeline.composite(g, std::move(lit.indirect));
       const auto write_start = std::chrono::steady_clock::now();
@@ -115,7 +190,7 @@ RunReport run_sequence(const RunOptions& options, const FrameCallback& on_frame)
     }
     fr.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     report.frames.push_back(fr);
-    if (on_frame) on_frame(report.frames.back(), i + 1, total);
+    if (callbacks.on_frame) callbacks.on_frame(report.frames.back(), i + 1, total);
     if (!fr.ok && options.fail_fast) break;  // the frames after it are not attempted
   }
   return report;

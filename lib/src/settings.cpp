@@ -1,7 +1,7 @@
 // Presets and the settings as text.
 #include "ssgi/settings.h"
 
-#include <sstream>
+#include <charconv>
 
 #include "ssgi/error.h"
 
@@ -33,11 +33,13 @@ const char* tracer_name(Tracer t) {
   return "?";
 }
 
+// The shortest text that reads back as the same value (0.1f is "0.1"), so that two settings
+// that differ never print alike: the output's provenance compares them as text.
 template <typename T>
 std::string text(const T& v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
+  char buffer[64];
+  const auto [end, ec] = std::to_chars(buffer, buffer + sizeof buffer, v);
+  return ec == std::errc() ? std::string(buffer, end) : std::string("?");
 }
 
 }  // namespace
@@ -92,12 +94,25 @@ std::vector<std::pair<std::string, std::string>> describe_settings(const GiSetti
   }
   out.emplace_back("bounces", text(s.bounces));
   out.emplace_back("thickness", text(s.thickness));
+  out.emplace_back("start-offset", text(s.start_offset));
   out.emplace_back("max-distance", text(s.max_distance));
   out.emplace_back("miss", miss_mode_name(s.miss));
   out.emplace_back("env", s.env_map.empty() ? text(s.env_color[0]) + "," + text(s.env_color[1]) +
                                                   "," + text(s.env_color[2])
                                             : s.env_map);
+  if (!s.env_map.empty()) out.emplace_back("env-up", std::string(1, s.env_up));
+  out.emplace_back("gather-emission", s.gather_emission < 0    ? "layout"
+                                      : s.gather_emission == 0 ? "no"
+                                                               : "yes");
   out.emplace_back("denoise", s.denoise == DenoiseMode::kPyramid ? "pyramid" : "none");
+  if (s.denoise == DenoiseMode::kPyramid) {
+    const DenoiseSettings& d = s.denoise_settings;
+    out.emplace_back("denoise-radius", text(d.radius));
+    out.emplace_back("denoise-sigma-spatial", text(d.sigma_spatial));
+    out.emplace_back("denoise-sigma-depth", text(d.sigma_depth));
+    out.emplace_back("denoise-normal-power", text(d.normal_power));
+    out.emplace_back("denoise-blur", text(d.upsample_blur_radius));
+  }
   out.emplace_back("temporal", s.temporal == TemporalMode::kNone ? std::string("none")
                                : s.temporal == TemporalMode::kEma
                                    ? "ema:" + text(s.ema_alpha)

@@ -20,14 +20,15 @@ struct GBuffer {
   Box2i data_window;
   Camera camera;
 
-  Image depth;        // 1: planar camera-space z; +inf where there is no surface
-  Image normal;       // 3: unit camera-space normal; 0 where there is no surface
-  Image albedo;       // 3: diffuse albedo
-  Image direct;       // 3: direct light the surface reflects (albedo included)
-  Image emission;     // 3 or absent
-  Image motion_prev;  // 2 or absent: display pixels, +y down, to the point in frame - 1
-  Image motion_next;  // 2 or absent: the same to frame + 1
-  Image beauty;       // 4 or absent: the renderer's composite, alpha in channel 3
+  Image depth;                // 1: planar camera-space z; +inf where there is no surface
+  Image normal;               // 3: unit camera-space normal; 0 where there is no surface
+  Image albedo;               // 3: diffuse albedo
+  Image direct;               // 3: direct light the surface reflects (albedo included)
+  Image emission;             // 3 or absent
+  Image motion_prev;          // 2 or absent: display pixels, +y down, to the point in frame - 1
+  Image motion_next;          // 2 or absent: the same to frame + 1
+  Image beauty;               // 4 or absent: the renderer's composite, alpha in channel 3
+  std::size_t sanitized = 0;  // NaN or infinite values of the colour and normal passes, read as 0
 
   int width() const { return data_window.width(); }
   int height() const { return data_window.height(); }

@@ -101,4 +101,10 @@ void make_output_directory(const std::string& path);
 void write_frame(const std::string& path, const GBuffer& frame,
                  const std::vector<OutputLayer>& layers, const WriteOptions& options);
 
+// Why the file at `path` cannot stand for the frame a run would write there, or "" when it can:
+// it opens as an image, the first and last chunks of every part decode (a truncated file loses
+// its last), and its header holds each of `attributes` (name, value) as a string.
+std::string why_not_reusable(const std::string& path,
+                             const std::vector<std::pair<std::string, std::string>>& attributes);
+
 }  // namespace ssgi

@@ -17,6 +17,11 @@ struct RunOptions {
   WriteOptions write;
   GiSettings gi;
   bool fail_fast = false;  // --fail-fast: stop at the first frame that fails
+  // --skip-existing: a frame whose output exists, reads whole and was made by this version of
+  // ssgi with these settings (its header says) is not made again.
+  bool skip_existing = false;
+  // --no-clobber: refuse the run, before any frame is computed, when it would overwrite a file.
+  bool no_clobber = false;
 };
 
 // What became of one frame.
@@ -24,6 +29,7 @@ struct FrameReport {
   int frame = 0;
   std::string input, output;
   bool ok = false;
+  bool skipped = false;                         // ok: the output was already there (skip_existing)
   ErrorKind error_kind = ErrorKind::kInternal;  // when !ok
   std::string error_file, error;                // when !ok
   double seconds = 0;                           // read + process + write
@@ -31,21 +37,29 @@ struct FrameReport {
   // neighbours'), everything between those and the frame ready to encode (tracing, bounces,
   // denoise, temporal, composite), and encoding and writing.
   double read_ms = 0, gi_ms = 0, write_ms = 0;
+  std::size_t sanitized = 0;  // input values that were NaN or infinite, read as 0
 };
 
 struct RunReport {
   std::vector<FrameReport> frames;  // those attempted, in order
   int total = 0;                    // the frames the run was to write
   int failed() const;
+  int skipped() const;
 };
 
-// Called after each frame, from the thread that called run_sequence.
-using FrameCallback = std::function<void(const FrameReport&, int done, int total)>;
+// What run_sequence tells its caller as it goes, from the thread that called it.
+struct RunCallbacks {
+  // Once the frames are known, before any is computed: how many the run is to write, and how
+  // many of those are already there (skip_existing) and will not be made again.
+  std::function<void(int total, int reused)> on_start;
+  // After each frame, written, reused or failed; `done` frames of `total` are behind.
+  std::function<void(const FrameReport&, int done, int total)> on_frame;
+};
 
 // Runs the pipeline over the sequence. Errors that concern the whole run (bad options, a
-// pattern matching nothing, an output that would overwrite an input) are thrown as
-// ssgi::Error before any frame is written; an error in one frame is recorded in its report
-// and the other frames go on.
-RunReport run_sequence(const RunOptions& options, const FrameCallback& on_frame);
+// pattern matching nothing, an output that would overwrite an input, or with no_clobber any
+// existing output it would write again) are thrown as ssgi::Error before any frame is written;
+// an error in one frame is recorded in its report and the other frames go on.
+RunReport run_sequence(const RunOptions& options, const RunCallbacks& callbacks = {});
 
 }  // namespace ssgi

@@ -433,6 +433,7 @@ GBuffer read_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
     if (beauty.size() < 4) beauty.emplace_back(static_cast<std::size_t>(w) * h, 1.0f);
     g.beauty = to_image(beauty, w, h, &non_finite);
   }
+  g.sanitized = non_finite;
   if (non_finite > 0)
     log_warning(path + ": " + std::to_string(non_finite) +
                 " NaN or infinite values in normal, albedo, light or beauty channels read as 0");

@@ -309,4 +309,63 @@ void write_frame(const std::string& path, const GBuffer& frame,
   writer.commit();
 }
 
+namespace {
+
+// Decodes one chunk's worth of pixels at (x, y) of the current subimage and level: the
+// scanline block or tile holding it. False when it cannot be read.
+bool chunk_decodes(OIIO::ImageInput& in, int subimage, int level, int x, int y) {
+  const OIIO::ImageSpec& spec = in.spec();
+  std::vector<float> pixels;
+  if (spec.tile_width > 0) {
+    const int x0 = spec.x + (x - spec.x) / spec.tile_width * spec.tile_width;
+    const int y0 = spec.y + (y - spec.y) / spec.tile_height * spec.tile_height;
+    const int x1 = std::min(x0 + spec.tile_width, spec.x + spec.width);
+    const int y1 = std::min(y0 + spec.tile_height, spec.y + spec.height);
+    pixels.resize(static_cast<std::size_t>(x1 - x0) * (y1 - y0) * spec.nchannels);
+    return in.read_tiles(subimage, level, x0, x1, y0, y1, spec.z, spec.z + 1, 0, spec.nchannels,
+                         OIIO::TypeDesc::FLOAT, pixels.data());
+  }
+  pixels.resize(static_cast<std::size_t>(spec.width) * spec.nchannels);
+  return in.read_scanlines(subimage, level, y, y + 1, spec.z, 0, spec.nchannels,
+                           OIIO::TypeDesc::FLOAT, pixels.data());
+}
+
+}  // namespace
+
+std::string why_not_reusable(const std::string& path,
+                             const std::vector<std::pair<std::string, std::string>>& attributes) {
+  std::unique_ptr<OIIO::ImageInput> in;
+  try {
+    in = detail::open_image(path);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  for (const auto& [name, value] : attributes) {
+    const OIIO::ParamValue* p = in->spec().find_attribute(name, OIIO::TypeDesc::STRING);
+    if (p == nullptr) return "no " + name + " in its header: not written by this ssgi";
+    if (p->get_string() != value)
+      return name + " is '" + p->get_string() + "', not '" + value + "'";
+  }
+  for (int subimage = 0; in->seek_subimage(subimage, 0); ++subimage) {
+    if (in->spec().deep) continue;
+    int levels = 1;
+    while (in->seek_subimage(subimage, levels)) ++levels;
+    for (int level = 0; level < levels; ++level) {
+      if (!in->seek_subimage(subimage, level))
+        return "part " + std::to_string(subimage) + " is unreadable";
+      const OIIO::ImageSpec& spec = in->spec();
+      const bool whole =
+          (level > 0 || chunk_decodes(*in, subimage, level, spec.x, spec.y)) &&
+          chunk_decodes(*in, subimage, level, spec.x + spec.width - 1, spec.y + spec.height - 1);
+      if (!whole) {
+        const std::string error = detail::one_line(in->geterror());
+        return "incomplete or damaged (part " + std::to_string(subimage) + ": " +
+               (error.empty() ? std::string("cannot read its pixels") : error) + ")";
+      }
+    }
+  }
+  in->geterror();  // seek_subimage past the last part leaves a message
+  return "";
+}
+
 }  // namespace ssgi
