@@ -1238,6 +1238,80 @@ TEST_F(Cli, StatsRecordEachFramesTimingsAndTheSettings) {
       "'--stats' is not an option of ssgi info (it is of ssgi run or ssgi reference)");
 }
 
+// The channels and header of two EXRs that must be the same frame: every channel's values
+// equal, bit for bit.
+void expect_same_pixels(const std::string& a, const std::string& b) {
+  const ExrImage x = read_exr(a), y = read_exr(b);
+  ASSERT_EQ(x.channel_names(), y.channel_names()) << a << " vs " << b;
+  for (const auto& [name, plane] : x.planes) EXPECT_EQ(plane, y.planes.at(name)) << name;
+}
+
+// Starts `ssgi run IN -o DIR/o.####.exr -q --preset final --stats DIR/stats.json` (stderr to
+// /dev/null), watches DIR and sends `signal` at the first sight of a hidden temporary file
+// (`mid_write`) or `after_ms` after frame 1 is there, unless the run ends first. Returns the
+// wait status; *seen_temporary says whether a temporary file was there when it was sent.
+int signal_run(const std::string& in, const std::string& dir, int signal, bool mid_write,
+               int after_ms, bool* seen_temporary) {
+  std::vector<std::string> args = {
+      SSGI_BINARY, "run",      in,      "-o",      dir + "/o.####.exr",
+      "-q",        "--preset", "final", "--stats", dir + "/stats.json"};
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, "/dev/null", O_WRONLY, 0);
+  pid_t pid = 0;
+  const int spawned = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (spawned != 0) return -1;
+  int status = 0;
+  bool ended = false;
+  *seen_temporary = false;
+  for (int waited = 0; waited < 60000 && !ended; ++waited) {
+    bool temporary = false, first_frame = false;
+    std::error_code ec;
+    for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+      const std::string name = entry.path().filename().string();
+      temporary |= name[0] == '.';
+      first_frame |= name == "o.0001.exr";
+    }
+    if (mid_write ? temporary : first_frame) {
+      *seen_temporary = temporary;
+      ::usleep(static_cast<useconds_t>(after_ms) * 1000);
+      break;
+    }
+    ended = ::waitpid(pid, &status, WNOHANG) == pid;
+    ::usleep(500);
+  }
+  if (!ended) {
+    ::kill(pid, signal);
+    if (::waitpid(pid, &status, 0) != pid) return -1;
+  }
+  return status;
+}
+
+// Every file of `dir` under a final name (not hidden) is whole: it opens and all its pixels
+// read. Hidden ones are allowed only when `hidden_allowed`.
+void expect_only_whole_frames(const std::string& dir, bool hidden_allowed,
+                              const std::string& what) {
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    const std::string name = entry.path().filename().string();
+    if (name[0] == '.') {
+      EXPECT_TRUE(hidden_allowed) << name << " left, " << what;
+      continue;
+    }
+    EXPECT_EQ(name.find(".tmp"), std::string::npos) << name;
+    if (name == "stats.json") continue;
+    auto image = OIIO::ImageInput::open(entry.path().string());
+    ASSERT_TRUE(image) << name << ", " << what;
+    std::vector<float> pixels(image->spec().image_pixels() * image->spec().nchannels);
+    EXPECT_TRUE(
+        image->read_image(0, 0, 0, image->spec().nchannels, OIIO::TypeDesc::FLOAT, pixels.data()))
+        << name << ": " << image->geterror() << ", " << what;
+  }
+}
+
 TEST_F(Cli, SignalsStopTheRunRemoveTemporaryFilesAndLeaveFinishedFramesWhole) {
   // SIGINT and SIGTERM while a frame is being written (its hidden temporary file is on disk)
   // and at moments after the first frame is done: exit 130 or 143, nothing hidden or temporary
@@ -1255,41 +1329,8 @@ TEST_F(Cli, SignalsStopTheRunRemoveTemporaryFilesAndLeaveFinishedFramesWhole) {
     const Case& c = cases[k];
     const std::string dir = path("run" + std::to_string(k));
     std::filesystem::create_directory(dir);
-    std::vector<std::string> args = {
-        SSGI_BINARY, "run",      in,      "-o",      dir + "/o.####.exr",
-        "-q",        "--preset", "final", "--stats", dir + "/stats.json"};
-    std::vector<char*> argv;
-    for (std::string& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, "/dev/null", O_WRONLY, 0);
-    pid_t pid = 0;
-    ASSERT_EQ(posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ), 0);
-    posix_spawn_file_actions_destroy(&actions);
-    // Watch the directory until the moment comes, or the run ends first.
-    int status = 0;
-    bool ended = false, seen_temporary = false;
-    for (int waited = 0; waited < 60000 && !ended; ++waited) {
-      bool temporary = false, first_frame = false;
-      std::error_code ec;
-      for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
-        const std::string name = entry.path().filename().string();
-        temporary |= name[0] == '.';
-        first_frame |= name == "o.0001.exr";
-      }
-      if (c.mid_write ? temporary : first_frame) {
-        seen_temporary = temporary;
-        ::usleep(static_cast<useconds_t>(c.after_ms) * 1000);
-        break;
-      }
-      ended = ::waitpid(pid, &status, WNOHANG) == pid;
-      ::usleep(500);
-    }
-    if (!ended) {
-      ::kill(pid, c.signal);
-      ASSERT_EQ(::waitpid(pid, &status, 0), pid);
-    }
+    bool seen_temporary = false;
+    const int status = signal_run(in, dir, c.signal, c.mid_write, c.after_ms, &seen_temporary);
     ASSERT_TRUE(WIFEXITED(status)) << "case " << k;
     const int code = WEXITSTATUS(status);
     if (code != 0) {
@@ -1297,22 +1338,43 @@ TEST_F(Cli, SignalsStopTheRunRemoveTemporaryFilesAndLeaveFinishedFramesWhole) {
       ++interrupted;
       mid_write += seen_temporary;
     }
-    for (const auto& entry : std::filesystem::directory_iterator(dir)) {
-      const std::string name = entry.path().filename().string();
-      EXPECT_NE(name[0], '.') << name << " left after a signal, case " << k;
-      EXPECT_EQ(name.find(".tmp"), std::string::npos) << name;
-      if (name == "stats.json") continue;
-      auto image = OIIO::ImageInput::open(entry.path().string());
-      ASSERT_TRUE(image) << name;
-      std::vector<float> pixels(image->spec().image_pixels() * image->spec().nchannels);
-      EXPECT_TRUE(
-          image->read_image(0, 0, 0, image->spec().nchannels, OIIO::TypeDesc::FLOAT, pixels.data()))
-          << name << ": " << image->geterror();
-    }
+    expect_only_whole_frames(dir, /*hidden_allowed=*/false, "case " + std::to_string(k));
   }
   // The signals came during the runs, and some while a frame was being written.
   EXPECT_GE(interrupted, 5);
   EXPECT_GE(mid_write, 2);
+}
+
+TEST_F(Cli, KillMidWriteLeavesNoPartialFrameAndAResumeFinishesTheShot) {
+  // SIGKILL cannot be caught: the frame being written stays a hidden temporary file, never a
+  // partial file under its final name. The farm's retry with --skip-existing keeps the frames
+  // the killed run finished and makes the others: the same frames as a run never killed.
+  const std::string in = testdata("sample/sample.####.exr");
+  const std::string dir = path("killed");
+  std::filesystem::create_directory(dir);
+  bool seen_temporary = false;
+  const int status = signal_run(in, dir, SIGKILL, /*mid_write=*/false, 0, &seen_temporary);
+  ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL) << "the run ended first";
+  expect_only_whole_frames(dir, /*hidden_allowed=*/true, "after SIGKILL");
+  const std::vector<std::string> args = {"run", in, "-q", "--preset", "final", "-o"};
+  std::vector<std::string> resume = args;
+  resume.push_back(dir + "/o.####.exr");
+  resume.push_back("--skip-existing");
+  resume.push_back("--stats");
+  resume.push_back(path("resume.json"));
+  ASSERT_EQ(run_ssgi(resume).exit_code, 0);
+  std::ifstream file(path("resume.json"));
+  const nlohmann::json stats = nlohmann::json::parse(file, nullptr, false);
+  ASSERT_FALSE(stats.is_discarded());
+  EXPECT_GE(stats["summary"]["skipped"].get<int>(), 1);  // frame 1 was there
+  EXPECT_GE(stats["summary"]["written"].get<int>(), 1);
+  std::vector<std::string> whole = args;
+  whole.push_back(path("whole.####.exr"));
+  ASSERT_EQ(run_ssgi(whole).exit_code, 0);
+  for (int f = 1; f <= 6; ++f) {
+    const std::string name = "o.000" + std::to_string(f) + ".exr";
+    expect_same_pixels(dir + "/" + name, path("whole.000" + std::to_string(f) + ".exr"));
+  }
 }
 
 TEST_F(Cli, ScalarTwinsGiveTheSameBitsAsSimd) {
@@ -1331,14 +1393,6 @@ TEST_F(Cli, ScalarTwinsGiveTheSameBitsAsSimd) {
     const std::vector<float>& ind = a.planes.at("indirect.R");
     EXPECT_GT(*std::max_element(ind.begin(), ind.end()), 0.0f);
   }
-}
-
-// The channels and header of two EXRs that must be the same frame: every channel's values
-// equal, bit for bit.
-void expect_same_pixels(const std::string& a, const std::string& b) {
-  const ExrImage x = read_exr(a), y = read_exr(b);
-  ASSERT_EQ(x.channel_names(), y.channel_names()) << a << " vs " << b;
-  for (const auto& [name, plane] : x.planes) EXPECT_EQ(plane, y.planes.at(name)) << name;
 }
 
 TEST_F(Cli, SkipExistingKeepsWholeMatchingOutputsAndMakesTheRest) {
