@@ -13,7 +13,7 @@
 # Exit status: 0 all frames identical, 1 a failure, 77 skipped because Slurm, MUNGE or OIIO's
 # tools are not installed (Debian: slurm-wlm munge openimageio-tools). Run it as root, so that
 # slurmd can start the jobs; SLURM_TEST_KEEP=1 keeps the temporary directory for a post-mortem.
-# Not part of the default ctest run: it takes about half a minute and needs those packages.
+# Not part of the default ctest run: it starts daemons, takes 10-40 s and needs those packages.
 set -euo pipefail
 
 root=$(cd "$(dirname "$0")/../.." && pwd)
