@@ -7,7 +7,7 @@
                                       require every break to be caught
 
 SSGI is the built ssgi: each example's ssgi command line may use only options that
-`SSGI run --help` lists (except --progress until it exists; then its value must be listed).
+`SSGI run --help` lists, and a --progress value must be one the help names.
 What is checked, and where each rule comes from:
   ssgi.openjd.yaml   OpenJD jobtemplate-2023-09 (openjd-specifications wiki, Template Schemas;
                      the TASK_CHUNKING extension, RFC 0001): root and step keys, parameter
@@ -36,7 +36,7 @@ import tempfile
 
 import yaml
 
-PENDING_OPTIONS = {"progress"}  # being added in parallel (issue 15)
+WORD_VALUED_OPTIONS = {"progress"}  # their value must be a word `ssgi run --help` names
 
 
 class Checker:
@@ -78,7 +78,7 @@ class Checker:
                 i += 1
                 continue
             known = name in self.long_takes_value
-            if not known and name not in PENDING_OPTIONS:
+            if not known:
                 self.error(where, "ssgi run has no option %s" % word)
                 i += 1
                 continue
@@ -90,14 +90,9 @@ class Checker:
                 value = argv[i + 1]
                 i += 1
             seen[name] = value
-            if name in PENDING_OPTIONS:
-                if known:
-                    if not re.search(r"\b%s\b" % re.escape(value), self.help_text):
-                        self.error(where, "--%s %s: the value is not in ssgi run --help" %
-                                   (name, value))
-                else:
-                    self.notes.append("%s: --%s %s is not in `ssgi run --help` yet; accepted "
-                                      "as pending" % (where, name, value))
+            if name in WORD_VALUED_OPTIONS and not re.search(r"\b%s\b" % re.escape(value),
+                                                             self.help_text):
+                self.error(where, "--%s %s: the value is not in ssgi run --help" % (name, value))
             i += 1
         if len(positional) != 1:
             self.error(where, "expected one INPUT, got %r" % positional)

@@ -186,30 +186,34 @@ node_idle() { [ "$(sinfo -h -N -n "$node" -o %T 2>/dev/null)" = idle ]; }
 wait_for 60 node_idle || die "node $node did not become idle within 60 s"
 say "slurmctld (port $ctld_port) and slurmd (port $slurmd_port) up; node $node idle with $cpus CPUs"
 
-# The array: one CPU per task, so that tasks run side by side on this machine.
-job=$(SSGI=$ssgi sbatch --parsable --array=0-$((tasks - 1)) --cpus-per-task=1 \
-  --chdir="$tmp" --output="$tmp/log/task-%a.out" \
-  "$root/tests/farm/ssgi_array.sbatch" "$shot" "$tmp/array/moving.####.exr" \
-  "$first-$last" "$chunk")
-job=${job%%;*}
-say "submitted job $job: $tasks array tasks over frames $first-$last in chunks of $chunk"
-job_gone() { [ -z "$(squeue -h -j "$job" -o %i)" ]; }
-wait_for 300 job_gone || die "job $job still queued or running after 300 s"
-say "job $job left the queue"
-
-# Each task's final state and exit code, from slurmctld's record of the job.
-mapfile -t records < <(scontrol -o show job "$job")
-[ ${#records[@]} -eq "$tasks" ] || die "scontrol shows ${#records[@]} tasks of job $job, expected $tasks"
-for record in "${records[@]}"; do
-  [[ $record =~ ArrayTaskId=([0-9]+) ]] || die "no ArrayTaskId in: $record"
-  id=${BASH_REMATCH[1]}
-  [[ $record =~ JobState=([A-Z_]+) ]] || die "no JobState in: $record"
-  state=${BASH_REMATCH[1]}
-  [[ $record =~ ExitCode=([0-9]+:[0-9]+) ]] || die "no ExitCode in: $record"
-  code=${BASH_REMATCH[1]}
-  [ "$state" = COMPLETED ] && [ "$code" = 0:0 ] || die "task $id: $state, exit code $code"
-  say "task $id: $state, exit code $code: $(grep -m1 '^ssgi_array:' "$tmp/log/task-$id.out" || true)"
-done
+# The array: one CPU per task, so that tasks run side by side on this machine. Submits it with
+# log files under $tmp/log/$1-task-N.out, waits, and checks each task's final state and exit
+# code in slurmctld's record of the job.
+run_array() {
+  local label=$1 job records record id state code
+  job=$(SSGI=$ssgi sbatch --parsable --array=0-$((tasks - 1)) --cpus-per-task=1 \
+    --chdir="$tmp" --output="$tmp/log/$label-task-%a.out" \
+    "$root/tests/farm/ssgi_array.sbatch" "$shot" "$tmp/array/moving.####.exr" \
+    "$first-$last" "$chunk")
+  job=${job%%;*}
+  say "$label: submitted job $job: $tasks array tasks over frames $first-$last in chunks of $chunk"
+  job_gone() { [ -z "$(squeue -h -j "$job" -o %i)" ]; }
+  wait_for 300 job_gone || die "job $job still queued or running after 300 s"
+  say "$label: job $job left the queue"
+  mapfile -t records < <(scontrol -o show job "$job")
+  [ ${#records[@]} -eq "$tasks" ] || die "scontrol shows ${#records[@]} tasks of job $job, expected $tasks"
+  for record in "${records[@]}"; do
+    [[ $record =~ ArrayTaskId=([0-9]+) ]] || die "no ArrayTaskId in: $record"
+    id=${BASH_REMATCH[1]}
+    [[ $record =~ JobState=([A-Z_]+) ]] || die "no JobState in: $record"
+    state=${BASH_REMATCH[1]}
+    [[ $record =~ ExitCode=([0-9]+:[0-9]+) ]] || die "no ExitCode in: $record"
+    code=${BASH_REMATCH[1]}
+    [ "$state" = COMPLETED ] && [ "$code" = 0:0 ] || die "task $id: $state, exit code $code"
+    say "$label: task $id: $state, exit code $code: $(grep -m1 '^ssgi_array:' "$tmp/log/$label-task-$id.out" || true)"
+  done
+}
+run_array first
 
 # The same frames in one process, with this machine's default thread count.
 "$ssgi" run "$shot" -o "$tmp/single/moving.####.exr" --frames "$first-$last" -q ||
@@ -232,4 +236,37 @@ for ((f = first; f <= last; f++)); do
   idiff -fail 0 -warn 0 "$tmp/array/$name" "$tmp/single/$name" >"$tmp/log/idiff-$f.out" ||
     die "frame $f: the array's pixels differ from the single run's:$(grep -m1 -i 'max error' "$tmp/log/idiff-$f.out" | sed 's/ *values are.*//')"
 done
-say "PASS: frames $first-$last from $tasks array tasks are identical to one run, every channel of every pixel"
+say "frames $first-$last from $tasks array tasks are identical to one run, every channel of every pixel"
+
+# A resubmission after damage, as a wrangler retries a shot: one frame cut short (a half-copied
+# file), one gone. The tasks keep the frames that are whole (--skip-existing in the batch
+# script), make the two again, and the shot is again identical to the single run.
+damaged=$((first + 1))
+gone=$last
+damaged_name=$(printf 'moving.%04d.exr' "$damaged")
+gone_name=$(printf 'moving.%04d.exr' "$gone")
+mkdir -p "$tmp/kept"
+for ((f = first; f <= last; f++)); do
+  name=$(printf 'moving.%04d.exr' "$f")
+  [ "$f" -eq "$damaged" ] || [ "$f" -eq "$gone" ] || cp -p "$tmp/array/$name" "$tmp/kept/$name"
+done
+size=$(stat -c %s "$tmp/array/$damaged_name")
+truncate -s $((size / 2)) "$tmp/array/$damaged_name"
+rm "$tmp/array/$gone_name"
+run_array resubmitted
+for name in $(ls "$tmp/kept"); do
+  cmp -s "$tmp/kept/$name" "$tmp/array/$name" || die "$name was written again, though it was whole"
+done
+made=$(cat "$tmp"/log/resubmitted-task-*.out | grep -c ' frames written, ' || true)
+[ "$made" -eq "$tasks" ] || die "expected a summary line from each of the $tasks tasks, found $made"
+skipped=$(sed -n 's/.* frames written, \([0-9]*\) skipped.*/\1/p' "$tmp"/log/resubmitted-task-*.out |
+  paste -sd+ | bc)
+[ "$skipped" -eq $((last - first - 1)) ] ||
+  die "the resubmission skipped $skipped frames, expected $((last - first - 1))"
+for name in "$damaged_name" "$gone_name"; do
+  idiff -fail 0 -warn 0 "$tmp/array/$name" "$tmp/single/$name" >"$tmp/log/idiff-again.out" ||
+    die "$name, made again, differs from the single run"
+done
+[ "$(ls -A "$tmp/array")" = "$expected" ] || die "the resubmission left $(ls -A "$tmp/array" | tr '\n' ' ')"
+say "resubmitted: $skipped whole frames kept as they were, frames $damaged (cut short) and $gone (gone) made again, identical to one run"
+say "PASS"

@@ -37,7 +37,8 @@ def main(argv):
         outline.modules.shell.Shell(
             "gi",
             command=["ssgi", "run", shlex.quote(input_pattern),
-                     "-o", shlex.quote(output_pattern), "--frames", "#FRAMESPEC#"],
+                     "-o", shlex.quote(output_pattern), "--frames", "#FRAMESPEC#",
+                     "--skip-existing"],
             range=frames,
             chunk=chunk,
             cores=4,
