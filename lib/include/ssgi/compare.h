@@ -1,6 +1,6 @@
-// Image comparison for regression tests and accuracy measurements: error metrics on planar
-// float images, idiff-style pass/warn/fail thresholds, and the same on two EXR files' channels
-// selected by name (the library side of `ssgi compare`).
+// Image comparison for regression tests and accuracy measurements: OIIO idiff's numbers and
+// verdicts, and ssgi's error metrics on planar float images, each also on two EXR files'
+// channels (the library side of `ssgi compare`).
 #pragma once
 
 #include <array>
@@ -35,34 +35,10 @@ constexpr double kRelMseEpsilon = 0.01;
 // 1e10, Arnold AI_BIG (1e12), others inf.
 constexpr double kBackgroundDepth = 1e9;
 
-// idiff's thresholds on the per-pixel absolute difference (the largest over the compared
-// channels). The defaults are idiff's: any difference above 1e-6 fails.
-struct Thresholds {
-  double warn = 1e-6;         // a pixel "warns" when its difference exceeds this
-  double warn_percent = 0.0;  // WARN when more than this % of pixels warn
-  double fail = 1e-6;         // a pixel "fails" when its difference exceeds this
-  double fail_percent = 0.0;  // FAIL when more than this % of pixels fail
-  double hard_fail = std::numeric_limits<double>::infinity();  // FAIL when any pixel exceeds
-};
-
 // Outcome of a comparison; the numeric values are `ssgi compare`'s exit codes.
 enum class CompareStatus : int { kOk = 0, kWarn = 1, kFail = 2 };
 // "ok", "warn", "fail".
 const char* status_name(CompareStatus status);
-
-// Per-pixel difference counts over every pixel of the image (background included, as idiff).
-struct PixelDiffStats {
-  std::size_t pixels = 0;
-  std::size_t warn_pixels = 0;  // pixels whose difference exceeds Thresholds::warn
-  std::size_t fail_pixels = 0;  // pixels whose difference exceeds Thresholds::fail
-  double max_error = 0.0;       // the largest difference; inf when only one side is not finite
-  int max_x = -1, max_y = -1;   // where it is (data-window pixel), -1 when all equal
-  int max_plane = -1;           // and in which plane
-};
-
-// Applies idiff's rules: FAIL when more than fail_percent % of pixels fail or any pixel exceeds
-// hard_fail; otherwise WARN when more than warn_percent % of pixels warn; otherwise OK.
-CompareStatus evaluate_thresholds(const PixelDiffStats& diff, const Thresholds& thresholds);
 
 // A group of planes reported together (an EXR layer such as `indirect`).
 struct CompareLayer {
@@ -89,7 +65,6 @@ struct LayerStats {
 
 // How to compare.
 struct CompareOptions {
-  Thresholds thresholds;
   bool compute_ssim = true;  // SSIM costs ~20x the rest; skip it when it is not reported
   // Without a background mask, leave out of a layer's metrics the pixels where all its
   // reference channels are exactly 0 (background of a GI layer, which both sides get right).
@@ -100,20 +75,13 @@ struct CompareOptions {
 struct CompareResult {
   std::vector<LayerStats> layers;
   LayerStats overall;  // all layers' samples pooled; SSIM is the pixel-weighted layer mean
-  PixelDiffStats pixels;
-  CompareStatus status = CompareStatus::kOk;
 };
 
 // Compares `a` against the reference `b` (same size and plane count). `background`, when not
-// empty, holds one byte per pixel, nonzero for pixels left out of every layer's metrics (but
-// not out of the thresholds).
+// empty, holds one byte per pixel, nonzero for pixels left out of every layer's metrics.
 CompareResult compare_images(const Image& a, const Image& b,
                              const std::vector<CompareLayer>& layers, const CompareOptions& options,
                              const std::vector<std::uint8_t>& background = {});
-
-// |a - b| * scale per sample (same sizes): 0 where both are the same infinity or both NaN, +inf
-// where only one side is not finite.
-Image difference_image(const Image& a, const Image& b, float scale = 1.0f);
 
 // The background mask of a reference depth plane: 1 where depth is not finite or
 // |depth| >= kBackgroundDepth.
@@ -132,13 +100,10 @@ struct LayerSummary {
   std::array<MetricSummary, kMetricCount> metrics;
 };
 
-// A sequence's comparisons summed up.
+// A sequence's metrics summed up.
 struct SequenceSummary {
   std::vector<LayerSummary> layers;  // in order of first appearance
   LayerSummary overall;
-  std::array<int, 3> status_counts{};  // frames per CompareStatus
-  CompareStatus status = CompareStatus::kOk;
-  int worst_index = -1;  // the worst status, ties broken by the largest overall RMSE
 };
 
 // Summarises per-frame results (an empty list gives an empty summary).
@@ -169,23 +134,114 @@ struct FileCompareOptions {
   std::string depth_channel;
   bool all_pixels = false;  // no background: every pixel counts in the metrics
   CompareOptions compare;
-  std::string diff_path;  // write |a - b| * diff_scale of the compared channels here
-  float diff_scale = 1.0f;
 };
 
 // A file comparison: the metrics and what they were computed on.
 struct FileCompareResult {
-  CompareResult result;  // max_x, max_y in display coordinates (the data window's origin added)
+  CompareResult result;
   std::vector<LayerChannels> layers;
-  std::vector<std::string> plane_names;  // a's channel name of each plane (max_plane indexes it)
+  std::vector<std::string> plane_names;  // a's channel name of each plane
   std::string depth_channel;             // the reference channel used for background, if any
 };
 
-// Reads the selected channels of `a_path` and the reference `b_path` by name and compares
-// them; writes the difference image when asked (atomically: a temporary file, then rename).
-// Throws Error(kIO) naming a file that cannot be read or written, Error(kInput) for a
-// missing channel or data windows that differ.
+// Reads the selected channels of `a_path` and the reference `b_path` by name and computes
+// ssgi's metrics on them. Throws Error(kIO) naming a file that cannot be read, Error(kInput)
+// for a missing channel or data windows that differ.
 FileCompareResult compare_files(const std::string& a_path, const std::string& b_path,
                                 const FileCompareOptions& options);
+
+// idiff (OpenImageIO 2.4's `idiff` and ImageBufAlgo::compare), reproduced so that `ssgi
+// compare` gives its numbers and statuses: every channel by index (the union of both channel
+// counts, a missing channel read as 0) over the union of both data windows (outside a window,
+// black). The per-sample rules, NaN and infinity quirks included, are those of OIIO 2.4.
+
+// idiff's thresholds. They are floats because idiff parses them as floats: `-warn 0.01` is
+// 0.01f, and a difference of exactly 0.01 (a double) is over it.
+struct IdiffThresholds {
+  float fail = 1e-6f;          // a pixel fails when a channel differs by more (and rel. below)
+  float fail_relative = 0.0f;  // ... and |a - b| / mean(|a|, |b|) exceeds this
+  float fail_percent = 0.0f;   // FAIL when more than this % of A's pixels fail
+  float hard_fail = std::numeric_limits<float>::infinity();  // FAIL when the max error exceeds
+  int allow_failures = 0;  // PASS whatever else when at most this many pixels fail
+  float warn = 1e-6f;
+  float warn_relative = 0.0f;
+  float warn_percent = 0.0f;
+  float hard_warn = std::numeric_limits<float>::infinity();
+};
+
+// An image as idiff sees one subimage: float samples in a data window.
+struct WindowedImage {
+  Box2i window;  // the data window, in pixel coordinates
+  Image pixels;  // window-sized planes
+  std::vector<std::string> channel_names;
+
+  // Channel c at (x, y); 0 outside the data window or past the last channel (OIIO's black).
+  float sample(int x, int y, int c) const {
+    if (c >= pixels.channels() || !window.contains(x, y)) return 0.0f;
+    return pixels.at(c, x - window.x0, y - window.y0);
+  }
+};
+
+// ImageBufAlgo::compare's results.
+struct IdiffStats {
+  double mean_error = 0.0;  // sum |a - b| / (pixels x channels) of the union; inf or NaN when
+  double rms_error = 0.0;   // ... a non-finite difference gets into the sums
+  double psnr = 0.0;        // 20 log10(peak / rms), peak = max(1, largest |a|, |b|)
+  double max_error = 0.0;   // inf for a non-finite value against a different one
+  int max_x = 0, max_y = 0, max_channel = 0;  // where the max error is; meaningful when it is not 0
+  std::size_t warn_pixels = 0, fail_pixels = 0;
+};
+
+// Compares two images as ImageBufAlgo::compare(a, b, fail, warn, fail_relative,
+// warn_relative) does.
+IdiffStats idiff_compare(const WindowedImage& a, const WindowedImage& b,
+                         const IdiffThresholds& thresholds);
+
+// idiff's verdict after one more subimage, from the verdict so far: when at most
+// allow_failures pixels fail, nothing changes (so without a failing pixel there is no
+// warning and no hard failure either); else FAIL when more than fail_percent % of `pixels`
+// fail or the max error exceeds hard_fail; else WARN when more than warn_percent % warn or the
+// max error exceeds hard_warn. `pixels` is A's pixel count (at least 1).
+CompareStatus idiff_status(const IdiffStats& stats, std::size_t pixels,
+                           const IdiffThresholds& thresholds, CompareStatus so_far);
+
+// How idiff compares two files.
+struct IdiffOptions {
+  IdiffThresholds thresholds;
+  bool all_subimages = false;  // -a: every subimage (part), else the first
+  // select_layers() items: compare these channels (B's paired with A's by name, from any part)
+  // as one image named as in A, instead of each subimage's channels by index.
+  std::vector<std::string> channels;
+  std::string diff_path;  // -o: write A - B (of the first subimage compared) here
+  bool diff_abs = false;  // -abs: |A - B|
+  float diff_scale = 1.0f;
+  bool diff_only_if_different = false;  // -od: only when the max error is not 0
+};
+
+// One subimage as idiff reports it.
+struct IdiffSubimage {
+  int subimage = 0;
+  int width = 0, height = 0, channels = 0;  // A's
+  std::size_t pixels = 1;                   // A's pixel count, the base of the percentages
+  IdiffStats stats;
+  CompareStatus status = CompareStatus::kOk;  // the file's verdict after this subimage
+  std::string max_channel_name;               // A's name of stats.max_channel, else B's
+  std::vector<float> a_values, b_values;      // every channel at (max_x, max_y), as read
+};
+
+// A file comparison as idiff does it.
+struct IdiffFileResult {
+  std::vector<IdiffSubimage> subimages;       // those compared, in order
+  int a_subimages = 1, b_subimages = 1;       // in the files (1 with IdiffOptions::channels)
+  CompareStatus status = CompareStatus::kOk;  // FAIL too when -a meets unequal subimage counts
+  bool diff_written = false;
+};
+
+// Compares `a_path` with `b_path` as idiff does and writes the difference image when asked
+// (atomically). Throws Error(kIO) naming a file that cannot be read or written, Error(kInput)
+// for deep data or a channel --channels names that is missing, Error(kUsage) for channels
+// together with all_subimages.
+IdiffFileResult idiff_files(const std::string& a_path, const std::string& b_path,
+                            const IdiffOptions& options);
 
 }  // namespace ssgi

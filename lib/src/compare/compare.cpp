@@ -1,5 +1,5 @@
-// Error metrics between planar float images: RMSE, relRMSE, relMSE, PSNR, SSIM, and idiff's
-// per-pixel thresholds.
+// ssgi's error metrics between planar float images: RMSE, relRMSE, relMSE, PSNR, SSIM over
+// the foreground pixels of each layer.
 #include "ssgi/compare.h"
 
 #include <algorithm>
@@ -210,24 +210,6 @@ const char* status_name(CompareStatus status) {
   return "?";
 }
 
-CompareStatus evaluate_thresholds(const PixelDiffStats& diff, const Thresholds& thresholds) {
-  const double pixels = static_cast<double>(diff.pixels);
-  if (diff.fail_pixels > thresholds.fail_percent / 100.0 * pixels ||
-      diff.max_error > thresholds.hard_fail)
-    return CompareStatus::kFail;
-  if (diff.warn_pixels > thresholds.warn_percent / 100.0 * pixels) return CompareStatus::kWarn;
-  return CompareStatus::kOk;
-}
-
-Image difference_image(const Image& a, const Image& b, float scale) {
-  if (a.width() != b.width() || a.height() != b.height() || a.channels() != b.channels())
-    throw_input({}, "images differ in size or channel count");
-  Image diff(a.width(), a.height(), a.channels());
-  for (std::size_t i = 0; i < diff.data().size(); ++i)
-    diff.data()[i] = static_cast<float>(sample_difference(a.data()[i], b.data()[i]) * scale);
-  return diff;
-}
-
 std::vector<std::uint8_t> background_from_depth(const float* depth, std::size_t pixels) {
   std::vector<std::uint8_t> background(pixels);
   for (std::size_t p = 0; p < pixels; ++p)
@@ -245,7 +227,6 @@ CompareResult compare_images(const Image& a, const Image& b,
     throw_input({}, "background mask differs in size from the images");
 
   CompareResult result;
-  std::vector<double> pixel_error(npix, 0.0);  // largest difference over the compared planes
   ErrorSums all_sums;
   double ssim_weighted = 0.0;
   std::size_t ssim_pixels = 0;
@@ -274,13 +255,6 @@ CompareResult compare_images(const Image& a, const Image& b,
       for (std::size_t p = 0; p < npix; ++p) {
         const double diff = sample_difference(pa[p], pb[p]);
         stats.max_error = std::max(stats.max_error, diff);
-        pixel_error[p] = std::max(pixel_error[p], diff);
-        if (diff > result.pixels.max_error) {
-          result.pixels.max_error = diff;
-          result.pixels.max_x = static_cast<int>(p % a.width());
-          result.pixels.max_y = static_cast<int>(p / a.width());
-          result.pixels.max_plane = c;
-        }
         if (!foreground[p]) continue;
         if (!std::isfinite(pa[p]) || !std::isfinite(pb[p])) {
           ++sums.nonfinite;
@@ -317,14 +291,6 @@ CompareResult compare_images(const Image& a, const Image& b,
   set_error_metrics(all_sums, &result.overall);
   if (ssim_pixels > 0)
     result.overall.metrics[static_cast<int>(Metric::kSsim)] = ssim_weighted / ssim_pixels;
-
-  const Thresholds& t = options.thresholds;
-  result.pixels.pixels = npix;
-  for (double e : pixel_error) {
-    result.pixels.warn_pixels += e > t.warn;
-    result.pixels.fail_pixels += e > t.fail;
-  }
-  result.status = evaluate_thresholds(result.pixels, t);
   return result;
 }
 
@@ -368,19 +334,6 @@ SequenceSummary summarize_frames(const std::vector<CompareResult>& frames) {
   }
   summarize_layer(&summary.overall,
                   [](const CompareResult& frame) -> const LayerStats* { return &frame.overall; });
-
-  double worst_rmse = -1.0;
-  for (std::size_t f = 0; f < frames.size(); ++f) {
-    const CompareStatus status = frames[f].status;
-    ++summary.status_counts[static_cast<int>(status)];
-    const double rmse = frames[f].overall.metric(Metric::kRmse).value_or(-1.0);
-    if (summary.worst_index < 0 || status > summary.status ||
-        (status == summary.status && rmse > worst_rmse)) {
-      summary.status = status;
-      summary.worst_index = static_cast<int>(f);
-      worst_rmse = rmse;
-    }
-  }
   return summary;
 }
 

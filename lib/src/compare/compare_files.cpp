@@ -1,5 +1,5 @@
 // Comparing two image files: channels selected by name across all subimages, read with OIIO,
-// compared with compare_images(), and the difference image written atomically.
+// for ssgi's metrics (compare_images()) and for idiff's comparison of chosen channels.
 #include <OpenImageIO/imageio.h>
 #include <unistd.h>
 
@@ -156,28 +156,69 @@ Image read_planes(OIIO::ImageInput& in, const std::vector<ChannelRef>& refs, con
   return image;
 }
 
-void write_difference(const std::string& path, const Image& diff,
-                      const std::vector<std::string>& names, const Box2i& data,
-                      const OIIO::ImageSpec& display) {
-  OIIO::ImageSpec spec(diff.width(), diff.height(), diff.channels(), OIIO::TypeDesc::FLOAT);
-  spec.x = data.x0;
-  spec.y = data.y0;
-  spec.full_x = display.full_x;
-  spec.full_y = display.full_y;
-  spec.full_width = display.full_width;
-  spec.full_height = display.full_height;
-  spec.channelnames = names;
+// Throws Error(kInput) when subimage `subimage` holds deep data.
+void refuse_deep(OIIO::ImageInput& in, int subimage, const std::string& path) {
+  in.seek_subimage(subimage, 0);
+  if (in.spec().deep) throw_input(path, "has deep data, which ssgi compare does not compare");
+}
+
+// Every channel of subimage `subimage` as idiff reads it. Throws Error(kInput) for deep data.
+WindowedImage read_subimage(OIIO::ImageInput& in, int subimage, const std::string& path) {
+  refuse_deep(in, subimage, path);
+  const OIIO::ImageSpec spec = in.spec();
+  WindowedImage image;
+  image.window = data_window_of(spec);
+  image.channel_names = spec.channelnames;
+  image.pixels = Image(spec.width, spec.height, spec.nchannels);
+  std::vector<int> all(static_cast<std::size_t>(spec.nchannels));
+  for (int c = 0; c < spec.nchannels; ++c) all[c] = c;
+  const std::vector<std::vector<float>> planes = detail::read_float_planes(in, subimage, all, path);
+  for (int c = 0; c < spec.nchannels; ++c)
+    std::copy(planes[c].begin(), planes[c].end(), image.pixels.plane(c));
+  return image;
+}
+
+// idiff -o: A - B (or |A - B| with -abs) times the scale over the union of the data windows,
+// in float; a channel only one image has is that image's value (as ImageBufAlgo::sub leaves
+// it). Named as in A, then B for channels A lacks; A's display window.
+void write_idiff_difference(const std::string& path, const WindowedImage& a, const WindowedImage& b,
+                            const IdiffOptions& options, const OIIO::ImageSpec& a_spec) {
+  const Box2i roi = {std::min(a.window.x0, b.window.x0), std::min(a.window.y0, b.window.y0),
+                     std::max(a.window.x1, b.window.x1), std::max(a.window.y1, b.window.y1)};
+  const int na = a.pixels.channels(), nb = b.pixels.channels(), n = std::max(na, nb);
+  OIIO::ImageSpec spec(roi.width(), roi.height(), n, OIIO::TypeDesc::FLOAT);
+  spec.x = roi.x0;
+  spec.y = roi.y0;
+  spec.full_x = a_spec.full_x;
+  spec.full_y = a_spec.full_y;
+  spec.full_width = a_spec.full_width;
+  spec.full_height = a_spec.full_height;
+  spec.channelnames = a.channel_names;
+  for (int c = na; c < n; ++c) spec.channelnames.push_back(b.channel_names[c]);
   spec.alpha_channel = -1;
   spec.z_channel = -1;
   spec.attribute("compression", "zip");
-  std::vector<float> interleaved(diff.data().size());
-  const int n = diff.channels();
-  for (int c = 0; c < n; ++c) {
-    const float* plane = diff.plane(c);
-    for (std::size_t p = 0; p < diff.plane_size(); ++p) interleaved[p * n + c] = plane[p];
+  std::vector<float> interleaved(static_cast<std::size_t>(roi.width()) * roi.height() * n);
+  std::size_t i = 0;
+  for (int y = roi.y0; y < roi.y1; ++y) {
+    for (int x = roi.x0; x < roi.x1; ++x) {
+      for (int c = 0; c < n; ++c, ++i) {
+        float d = c >= nb   ? a.sample(x, y, c)
+                  : c >= na ? b.sample(x, y, c)
+                            : a.sample(x, y, c) - b.sample(x, y, c);
+        if (options.diff_abs) d = std::abs(d);
+        interleaved[i] = d * options.diff_scale;
+      }
+    }
   }
-
   detail::write_image_atomically(path, spec, interleaved.data(), "difference image");
+}
+
+// Every channel of a subimage at (x, y), 0 outside its data window (OIIO's getchannel).
+std::vector<float> values_at(const WindowedImage& image, int x, int y) {
+  std::vector<float> values;
+  for (int c = 0; c < image.pixels.channels(); ++c) values.push_back(image.sample(x, y, c));
+  return values;
 }
 
 }  // namespace
@@ -300,16 +341,80 @@ FileCompareResult compare_files(const std::string& a_path, const std::string& b_
   CompareOptions compare = options.compare;
   if (options.all_pixels) compare.exclude_zero_reference = false;
   out.result = compare_images(a, b, compare_layers, compare, background);
-  if (out.result.pixels.max_plane >= 0) {
-    out.result.pixels.max_x += a_window.x0;
-    out.result.pixels.max_y += a_window.y0;
+  return out;
+}
+
+IdiffFileResult idiff_files(const std::string& a_path, const std::string& b_path,
+                            const IdiffOptions& options) {
+  if (options.all_subimages && !options.channels.empty())
+    throw_usage("-a compares subimages by index, --channels picks channels by name: not both");
+  auto a_in = detail::open_image(a_path);
+  auto b_in = detail::open_image(b_path);
+  const FileChannels a_file = probe_channels(*a_in), b_file = probe_channels(*b_in);
+
+  // The pairs of images to compare, with the subimage they stand for.
+  std::vector<std::pair<WindowedImage, WindowedImage>> pairs;
+  IdiffFileResult out;
+  if (!options.channels.empty()) {
+    const NamedChannels a_named = name_channels(a_file), b_named = name_channels(b_file);
+    WindowedImage a, b;
+    std::vector<ChannelRef> a_refs, b_refs;
+    for (const LayerChannels& layer :
+         select_layers(a_path, a_file, b_path, b_file, options.channels)) {
+      for (std::size_t i = 0; i < layer.a.size(); ++i) {
+        a_refs.push_back(a_named.where.at(layer.a[i]));
+        b_refs.push_back(b_named.where.at(layer.b[i]));
+        a.channel_names.push_back(layer.a[i]);
+        b.channel_names.push_back(layer.b[i]);
+      }
+    }
+    for (const ChannelRef& ref : a_refs) refuse_deep(*a_in, ref.subimage, a_path);
+    for (const ChannelRef& ref : b_refs) refuse_deep(*b_in, ref.subimage, b_path);
+    a.window = common_data_window(*a_in, a_refs, a_path);
+    b.window = common_data_window(*b_in, b_refs, b_path);
+    a.pixels = read_planes(*a_in, a_refs, a.window, a_path);
+    b.pixels = read_planes(*b_in, b_refs, b.window, b_path);
+    pairs.emplace_back(std::move(a), std::move(b));
+  } else {
+    out.a_subimages = static_cast<int>(a_file.channels.size());
+    out.b_subimages = static_cast<int>(b_file.channels.size());
+    for (int s = 0; s < out.a_subimages && s < out.b_subimages; ++s) {
+      if (s > 0 && !options.all_subimages) break;
+      WindowedImage a = read_subimage(*a_in, s, a_path);
+      pairs.emplace_back(std::move(a), read_subimage(*b_in, s, b_path));
+    }
   }
 
-  if (!options.diff_path.empty()) {
-    a_in->seek_subimage(a_refs.empty() ? 0 : a_refs[0].subimage, 0);
-    write_difference(options.diff_path, difference_image(a, b, options.diff_scale), out.plane_names,
-                     a_window, a_in->spec());
+  std::string diff_path = options.diff_path;
+  for (std::size_t s = 0; s < pairs.size(); ++s) {
+    const WindowedImage& a = pairs[s].first;
+    const WindowedImage& b = pairs[s].second;
+    IdiffSubimage sub;
+    sub.subimage = static_cast<int>(s);
+    sub.width = a.window.width();
+    sub.height = a.window.height();
+    sub.channels = a.pixels.channels();
+    sub.pixels = std::max<std::size_t>(1, static_cast<std::size_t>(sub.width) * sub.height);
+    sub.stats = idiff_compare(a, b, options.thresholds);
+    out.status = idiff_status(sub.stats, sub.pixels, options.thresholds, out.status);
+    sub.status = out.status;
+    const int c = sub.stats.max_channel;
+    sub.max_channel_name = c < static_cast<int>(a.channel_names.size())   ? a.channel_names[c]
+                           : c < static_cast<int>(b.channel_names.size()) ? b.channel_names[c]
+                                                                          : std::string();
+    sub.a_values = values_at(a, sub.stats.max_x, sub.stats.max_y);
+    sub.b_values = values_at(b, sub.stats.max_x, sub.stats.max_y);
+    // idiff writes the first subimage compared, or with -od the first that differs.
+    if (!diff_path.empty() && (sub.stats.max_error != 0.0 || !options.diff_only_if_different)) {
+      a_in->seek_subimage(static_cast<int>(s), 0);
+      write_idiff_difference(diff_path, a, b, options, a_in->spec());
+      out.diff_written = true;
+      diff_path.clear();
+    }
+    out.subimages.push_back(std::move(sub));
   }
+  if (options.all_subimages && out.a_subimages != out.b_subimages)
+    out.status = CompareStatus::kFail;
   return out;
 }
 
