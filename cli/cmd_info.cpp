@@ -9,6 +9,7 @@
 #include "run_options.h"
 #include "ssgi/layout.h"
 #include "ssgi/pipeline.h"
+#include "ssgi/simd.h"
 #include "ssgi/threads.h"
 
 namespace ssgi_cli {
@@ -43,8 +44,10 @@ struct Report {
   std::string preset;                                         // --preset, resolved
   std::vector<std::pair<std::string, std::string>> settings;  // with the options applied
   std::optional<ssgi::Plan> plan;
-  std::optional<ssgi::Error> problem;  // the first input problem, reported last
-  ssgi::ThreadBudget threads;          // how many worker threads a run would use, and why
+  std::optional<ssgi::Error> problem;     // the first input problem, reported last
+  ssgi::ThreadBudget threads;             // how many worker threads a run would use, and why
+  std::string simd;                       // the kernels' instruction set
+  std::vector<std::string> simd_targets;  // what --simd accepts here
 };
 
 Json window_json(const ssgi::Box2i& b) {
@@ -87,6 +90,7 @@ void print_json(const ssgi::InputOptions& in, const ssgi::SequenceInfo& seq, con
       {"preset", r.preset},
       {"settings", settings},
       {"threads", {{"count", r.threads.threads}, {"from", r.threads.source}}},
+      {"simd", {{"target", r.simd}, {"available", r.simd_targets}}},
       {"plan", r.plan ? Json(r.plan->reasons) : Json(nullptr)},
       {"error", r.problem ? Json(r.problem->what()) : Json(nullptr)},
   };
@@ -131,6 +135,9 @@ void print_text(const ssgi::InputOptions& in, const ssgi::SequenceInfo& seq, con
   for (const auto& [name, value] : r.settings)
     std::printf("  %-14s %s\n", name.c_str(), value.c_str());
   std::printf("threads:       %d (%s)\n", r.threads.threads, r.threads.source.c_str());
+  std::string targets;
+  for (const std::string& t : r.simd_targets) targets += (targets.empty() ? "" : ", ") + t;
+  std::printf("simd:          %s (--simd: %s)\n", r.simd.c_str(), targets.c_str());
   std::printf("plan:\n");
   if (r.plan) {
     for (const std::string& reason : r.plan->reasons) std::printf("  %s\n", reason.c_str());
@@ -155,6 +162,8 @@ int run_info(int argc, char** argv) {
   // light) are reported in their place and the report goes on, then exit with the first one.
   Report r;
   r.threads = threads.budget();
+  r.simd = ssgi::simd_target();
+  r.simd_targets = ssgi::simd_targets();
   r.preset = o.preset;
   r.settings = ssgi::describe_settings(o.run.gi);
   try {

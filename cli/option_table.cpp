@@ -184,6 +184,10 @@ const std::vector<OptionSpec> kTable = {
      [](const RunOptions&) { return std::string("auto"); }},
     {kThreads, "threads", 0, "N", OptionGroup::kGeneral, kPlanning,
      "worker threads (default: the scheduler's allocation, else the CPUs allowed)", nullptr},
+    {kSimd, "simd", 0, "TARGET", OptionGroup::kGeneral, kPlanning,
+     "the kernels' instruction set: auto, a target this CPU has (avx2, sse4, ...; ssgi info "
+     "lists them) or scalar; every one gives the same bits (default: $SSGI_SIMD, else auto)",
+     nullptr},
     {'v', "verbose", 'v', nullptr, OptionGroup::kGeneral, kPlanning,
      "print the plan and per-frame timings", nullptr},
     {'q', "quiet", 'q', nullptr, OptionGroup::kGeneral, kPlanning, "no progress, no warnings",

@@ -63,6 +63,7 @@ enum OptionId : int {
   kSkipExisting,
   kNoClobber,
   kProgress,
+  kSimd,
 };
 
 enum class OptionGroup { kInput, kGi, kOutput, kGeneral };

@@ -17,6 +17,7 @@
 #include "commands.h"
 #include "ssgi/error.h"
 #include "ssgi/log.h"
+#include "ssgi/simd.h"
 #include "ssgi/temporary_files.h"
 #include "ssgi/threads.h"
 
@@ -310,7 +311,7 @@ int run_with_progress(const CommonOptions& o) {
   warn_about_options(o);
   const ssgi::ThreadLimit threads(o.threads);
   ssgi::log_info("threads: " + std::to_string(threads.budget().threads) + " (" +
-                 threads.budget().source + ")");
+                 threads.budget().source + "), simd: " + ssgi::simd_target());
   ssgi::RunOptions run = o.run;
   run.write.provenance.emplace_back("ssgi:commandLine", o.command_line);
 

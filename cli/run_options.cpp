@@ -10,6 +10,7 @@
 #include "ssgi/error.h"
 #include "ssgi/io.h"
 #include "ssgi/log.h"
+#include "ssgi/simd.h"
 
 namespace ssgi_cli {
 namespace {
@@ -241,6 +242,10 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
       case kSeed:
         gi.seed = static_cast<std::uint32_t>(parse_long("seed", a, 0, 4294967295L));
         break;
+      case kSimd:
+        if (*a == '\0') ssgi::throw_usage("--simd needs a target");
+        o.simd = a;
+        break;
       case kThreads:
         o.threads = static_cast<int>(parse_long("threads", a, 0, 4096));
         break;
@@ -291,6 +296,16 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
   if (o.verbose && o.quiet)
     ssgi::throw_usage("-v (--verbose) and -q (--quiet) contradict each other");
   if (o.help) return o;
+  // The kernels' target: --simd, else SSGI_SIMD (a bad value of either is a usage error here).
+  const bool simd_given = !o.simd.empty();
+  if (!simd_given && std::getenv("SSGI_SIMD") != nullptr) o.simd = std::getenv("SSGI_SIMD");
+  if (!o.simd.empty()) {
+    try {
+      ssgi::set_simd_target(o.simd);
+    } catch (const ssgi::Error& e) {
+      ssgi::throw_usage(std::string(simd_given ? "--simd: " : "SSGI_SIMD: ") + e.what());
+    }
+  }
   // GNU getopt_long moves operands after the options, so `ssgi run IN -o OUT` works too.
   if (optind >= argc) ssgi::throw_usage("no input sequence given");
   if (argc - optind > 1)

@@ -22,6 +22,7 @@ struct CommonOptions {
   std::string stats;               // --stats FILE.json (ssgi run)
   std::string preset = "default";  // --preset
   std::string progress = "auto";   // --progress auto|lines|openjd|deadline
+  std::string simd;                // --simd TARGET; empty: SSGI_SIMD, else auto
 };
 
 // Parses argv (argv[0] is the subcommand) over subcommand_defaults(sub), with the options

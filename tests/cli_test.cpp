@@ -1377,22 +1377,54 @@ TEST_F(Cli, KillMidWriteLeavesNoPartialFrameAndAResumeFinishesTheShot) {
   }
 }
 
-TEST_F(Cli, ScalarTwinsGiveTheSameBitsAsSimd) {
-  // SSGI_SIMD=scalar runs every kernel's scalar twin; the kernels do each value's arithmetic in
-  // the twin's order, so the frames are the same bits (what makes a mixed farm safe).
+TEST_F(Cli, EverySimdTargetGivesTheSameBits) {
+  // Every target this CPU and build have (ssgi info lists them), Highway's portable ones and
+  // the scalar twins (--simd scalar, or SSGI_SIMD=scalar): the kernels do each value's
+  // arithmetic in the twin's order, so the frames are the same bits (what makes a mixed farm
+  // safe).
   const std::string in = testdata("sample/sample.1-2#.exr");
-  ASSERT_EQ(run_ssgi({"run", in, "-o", path("simd.####.exr"), "-q"}).exit_code, 0);
+  const CliResult info = run_ssgi({"info", in, "--json"});
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  const nlohmann::json report = nlohmann::json::parse(info.out);
+  std::vector<std::string> targets = report["simd"]["available"];
+  ASSERT_GE(targets.size(), 3u);  // auto, at least one target, scalar
+  EXPECT_EQ(targets.front(), "auto");
+  EXPECT_EQ(targets.back(), "scalar");
+  EXPECT_EQ(report["simd"]["target"], targets[1]);  // auto is the best
+  ASSERT_EQ(run_ssgi({"run", in, "-o", path("auto.####.exr"), "-q"}).exit_code, 0);
+  targets.erase(targets.begin());
+  for (const std::string& target : targets) {
+    const CliResult r =
+        run_ssgi({"run", in, "-o", path(target + ".####.exr"), "-q", "--simd", target});
+    ASSERT_EQ(r.exit_code, 0) << target << ": " << r.err;
+  }
   ::setenv("SSGI_SIMD", "scalar", 1);
-  const CliResult r = run_ssgi({"run", in, "-o", path("scalar.####.exr"), "-q"});
+  const CliResult env = run_ssgi({"run", in, "-o", path("env.####.exr"), "-q"});
+  const CliResult env_info = run_ssgi({"info", in});
+  ::setenv("SSGI_SIMD", "avx9", 1);
+  const CliResult bad_env = run_ssgi({"info", in});
   ::unsetenv("SSGI_SIMD");
-  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ASSERT_EQ(env.exit_code, 0) << env.err;
+  EXPECT_NE(env_info.out.find("simd:          scalar ("), std::string::npos) << env_info.out;
+  targets.push_back("env");
   for (const char* f : {"0001", "0002"}) {
-    const ExrImage a = read_exr(path(std::string("simd.") + f + ".exr"));
-    const ExrImage b = read_exr(path(std::string("scalar.") + f + ".exr"));
-    for (const std::string& c : kOurChannels) EXPECT_EQ(a.planes.at(c), b.planes.at(c)) << c;
+    const ExrImage a = read_exr(path(std::string("auto.") + f + ".exr"));
     const std::vector<float>& ind = a.planes.at("indirect.R");
     EXPECT_GT(*std::max_element(ind.begin(), ind.end()), 0.0f);
+    for (const std::string& target : targets) {
+      const ExrImage b = read_exr(path(target + "." + f + ".exr"));
+      for (const std::string& c : kOurChannels)
+        EXPECT_EQ(a.planes.at(c), b.planes.at(c)) << target << " " << c;
+    }
   }
+  std::string list;
+  for (const std::string& t : report["simd"]["available"]) list += (list.empty() ? "" : ", ") + t;
+  expect_usage_error(
+      bad_env, "info",
+      "SSGI_SIMD: SIMD target 'avx9' is not one this CPU and build have (" + list + ")");
+  const CliResult bad = run_ssgi({"run", in, "-o", path("x.####.exr"), "--simd", "avx9"});
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_EQ(bad.err.rfind("ssgi: error: --simd: SIMD target 'avx9' is not one", 0), 0u) << bad.err;
 }
 
 TEST_F(Cli, SkipExistingKeepsWholeMatchingOutputsAndMakesTheRest) {

@@ -1,8 +1,12 @@
-// Every SIMD kernel against its scalar twin: bit for bit, on odd sizes (every tail length) and
-// on the values that take the kernels' other branches (background, NaN, unknown normals,
-// back-facing normals, overflowing depth differences).
+// Every SIMD kernel against its scalar twin, on every SIMD target this CPU and build have
+// (ssgi::simd_targets: AVX2, SSE4, ... and Highway's portable ones): bit for bit, on odd sizes
+// (every tail length) and on the values that take the kernels' other branches (background,
+// NaN, unknown normals, back-facing normals, overflowing depth differences).
+#include "ssgi/simd.h"
+
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -15,6 +19,22 @@
 
 namespace ssgi::detail {
 namespace {
+
+// Each test runs once per target, pinned with set_simd_target.
+class SimdTarget : public ::testing::TestWithParam<std::string> {
+ protected:
+  void SetUp() override { set_simd_target(GetParam()); }
+  void TearDown() override { set_simd_target("auto"); }
+};
+
+// The targets to pin: every one but "auto" and "scalar" (the twins themselves).
+std::vector<std::string> pinned_targets() {
+  std::vector<std::string> targets = simd_targets();
+  targets.erase(std::remove_if(targets.begin(), targets.end(),
+                               [](const std::string& t) { return t == "auto" || t == "scalar"; }),
+                targets.end());
+  return targets;
+}
 
 Surface random_surface(std::mt19937& rng) {
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
@@ -63,7 +83,7 @@ struct RandomGuides {
   }
 };
 
-TEST(Simd, UpsampleRowMatchesTheScalarTwinBitForBit) {
+TEST_P(SimdTarget, UpsampleRowMatchesTheScalarTwinBitForBit) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<float> u(0.0f, 4.0f);
   std::size_t blended = 0;
@@ -107,7 +127,7 @@ TEST(Simd, UpsampleRowMatchesTheScalarTwinBitForBit) {
   EXPECT_GT(blended, 300u);  // the coarse light came through, not only the pixels' own
 }
 
-TEST(Simd, JointBilateralRowMatchesTheScalarTwinBitForBit) {
+TEST_P(SimdTarget, JointBilateralRowMatchesTheScalarTwinBitForBit) {
   std::mt19937 rng(6);
   std::uniform_real_distribution<float> u(0.0f, 4.0f);
   std::size_t blended = 0;
@@ -154,7 +174,7 @@ TEST(Simd, JointBilateralRowMatchesTheScalarTwinBitForBit) {
   EXPECT_GT(blended, 200u);  // neighbours' light came in
 }
 
-TEST(Simd, DownsampleRowMatchesTheScalarTwinBitForBit) {
+TEST_P(SimdTarget, DownsampleRowMatchesTheScalarTwinBitForBit) {
   std::mt19937 rng(4);
   std::uniform_real_distribution<float> u(0.0f, 4.0f);
   std::size_t mixed = 0;
@@ -210,7 +230,7 @@ TEST(Simd, DownsampleRowMatchesTheScalarTwinBitForBit) {
   EXPECT_GT(mixed, 50u);
 }
 
-TEST(Simd, DepthGradientRowMatchesTheScalarTwinBitForBit) {
+TEST_P(SimdTarget, DepthGradientRowMatchesTheScalarTwinBitForBit) {
   std::mt19937 rng(8);
   std::uniform_real_distribution<float> u(0.0f, 1.0f);
   std::size_t sloped = 0;
@@ -304,7 +324,7 @@ std::vector<MeshTexel> random_mesh(std::mt19937& rng, int w, int h) {
   return texels;
 }
 
-TEST(Simd, MarchSideMatchesTheScalarTwinBitForBit) {
+TEST_P(SimdTarget, MarchSideMatchesTheScalarTwinBitForBit) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
   std::size_t bits_set = 0, bridged = 0, samples = 0;
@@ -371,6 +391,11 @@ TEST(Simd, SectorCoordinatesSpanTheHemisphere) {
   EXPECT_NEAR(sector_coordinate(f, -1, 0, 0), 0.0f - 0.25f, 1e-4);   // against t
   EXPECT_NEAR(sector_coordinate(f, 0, 0, 1), 32.0f - 0.25f, 1e-4);   // behind: clamped
 }
+
+INSTANTIATE_TEST_SUITE_P(EveryTarget, SimdTarget, ::testing::ValuesIn(pinned_targets()),
+                         [](const ::testing::TestParamInfo<std::string>& info) {
+                           return info.param;
+                         });
 
 }  // namespace
 }  // namespace ssgi::detail

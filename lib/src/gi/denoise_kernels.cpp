@@ -402,14 +402,6 @@ HWY_EXPORT(DepthGradientRow);
 HWY_EXPORT(DownsampleRowSimd);
 HWY_EXPORT(JointBilateralRowSimd);
 
-bool simd_forced_scalar() {
-  static const bool forced = [] {
-    const char* v = std::getenv("SSGI_SIMD");
-    return v != nullptr && std::string(v) == "scalar";
-  }();
-  return forced;
-}
-
 void depth_gradient_row_scalar(const float* z, int w, int h, int y, float* gx, float* gy) {
   for (int x = 0; x < w; ++x) depth_gradient_pixel(z, w, h, x, y, gx, gy);
 }

@@ -356,7 +356,7 @@ void upsample_row_scalar(const GuidePlanes& fine, int y, const GuidePlanes& coar
                          const float* const coarse_light[3], const float* const own[3],
                          const RangeTerms& terms, float* const out[3]);
 
-// Whether SSGI_SIMD=scalar forces every kernel's scalar twin (read once).
+// Whether every kernel runs its scalar twin: set_simd_target("scalar") or SSGI_SIMD=scalar.
 bool simd_forced_scalar();
 
 }  // namespace ssgi::detail
