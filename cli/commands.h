@@ -1,6 +1,8 @@
 // The subcommands of the ssgi tool, one file each; main.cpp dispatches to them.
 #pragma once
 
+#include "ssgi/error.h"
+
 namespace ssgi_cli {
 
 // Exit codes, as documented in man/ssgi.1 (EXIT STATUS).
@@ -10,7 +12,23 @@ enum ExitCode : int {
   kExitUsage = 2,
   kExitInput = 3,
   kExitIO = 4,
+  kExitInternal = 5,  // a bug: an invariant broke
 };
+
+// The exit code of an error of kind `kind`.
+inline int exit_code_for(ssgi::ErrorKind kind) {
+  switch (kind) {
+    case ssgi::ErrorKind::kUsage:
+      return kExitUsage;
+    case ssgi::ErrorKind::kInput:
+      return kExitInput;
+    case ssgi::ErrorKind::kIO:
+      return kExitIO;
+    case ssgi::ErrorKind::kInternal:
+      return kExitInternal;
+  }
+  return kExitInternal;
+}
 
 // Each takes the arguments after the subcommand name (argv[0] is the subcommand) and returns
 // an exit code; ssgi::Error escaping from one is reported by main().

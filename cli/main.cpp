@@ -57,19 +57,6 @@ void install_signal_handlers() {
   for (int signal : {SIGINT, SIGTERM}) sigaction(signal, &action, nullptr);
 }
 
-int exit_code_for(ssgi::ErrorKind kind) {
-  switch (kind) {
-    case ssgi::ErrorKind::kUsage:
-      return ssgi_cli::kExitUsage;
-    case ssgi::ErrorKind::kInput:
-      return ssgi_cli::kExitInput;
-    case ssgi::ErrorKind::kIO:
-    case ssgi::ErrorKind::kInternal:
-      return ssgi_cli::kExitIO;
-  }
-  return ssgi_cli::kExitIO;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -98,13 +85,14 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "ssgi: error: %s: %s\n", e.file().c_str(), e.what());
       if (e.kind() == ssgi::ErrorKind::kUsage)
         std::fprintf(stderr, "Try 'ssgi %s --help'.\n", s.name);
-      return exit_code_for(e.kind());
+      return ssgi_cli::exit_code_for(e.kind());
     } catch (const std::bad_alloc&) {
       std::fprintf(stderr, "ssgi: error: out of memory\n");
       return ssgi_cli::kExitIO;
     } catch (const std::exception& e) {
-      std::fprintf(stderr, "ssgi: error: %s\n", e.what());
-      return ssgi_cli::kExitIO;
+      // Not an ssgi::Error: nothing meant it, a bug.
+      std::fprintf(stderr, "ssgi: internal error: %s\n", e.what());
+      return ssgi_cli::kExitInternal;
     }
   }
   std::fprintf(stderr, "ssgi: error: unknown subcommand '%s'\n", first.c_str());

@@ -26,12 +26,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-int exit_code_for(ssgi::ErrorKind kind) {
-  return kind == ssgi::ErrorKind::kInput   ? kExitInput
-         : kind == ssgi::ErrorKind::kUsage ? kExitUsage
-                                           : kExitIO;
-}
-
 double median(std::vector<double> v) {
   if (v.empty()) return 0;
   std::sort(v.begin(), v.end());
