@@ -1599,4 +1599,28 @@ TEST_F(Cli, OnATerminalAProgressBarShowsFramesRateAndEta) {
   EXPECT_EQ(screen.find("ssgi: frame "), std::string::npos) << screen;  // no per-frame lines
 }
 
+TEST_F(Cli, AnUnreadableNeighbourIsWarnedAboutOnce) {
+  // Frame 3 of 5 is not an EXR: it fails alone, and the four windows it falls in (+-2) leave it
+  // out with one warning between them, not one each.
+  for (int f = 1; f <= 5; ++f) {
+    const std::string name = "in.000" + std::to_string(f) + ".exr";
+    if (f == 3)
+      std::ofstream(path(name)) << "not an image";
+    else
+      fs::copy_file(testdata("sample/sample.000" + std::to_string(f) + ".exr"), path(name));
+  }
+  const CliResult r = run_ssgi({"run", path("in.####.exr"), "-o", path("o.####.exr"), "--preset",
+                                "draft", "--progress", "lines"});
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  int warnings = 0, errors = 0;
+  for (const std::string& line : r.err_lines()) {
+    warnings += line.rfind("ssgi: warning: " + path("in.0003.exr") + ": ", 0) == 0 &&
+                line.find("left out of the temporal window") != std::string::npos;
+    errors += line.rfind("ssgi: error: " + path("in.0003.exr") + ": ", 0) == 0;
+  }
+  EXPECT_EQ(warnings, 1) << r.err;
+  EXPECT_EQ(errors, 1) << r.err;
+  EXPECT_EQ(r.err_lines().back(), "ssgi: 4 of 5 frames written, 1 failed (3)");
+}
+
 }  // namespace

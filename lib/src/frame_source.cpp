@@ -88,11 +88,13 @@ FrameSource::Result FrameSource::window(int frame) {
       if (f == frame) {
         it = ring_.emplace(f, light(f)).first;  // the frame's own failure throws
       } else {
+        if (unreadable_.count(f)) continue;  // warned about once, not tried again
         try {
           it = ring_.emplace(f, light(f)).first;
         } catch (const Error& e) {
           log_warning((e.file().empty() ? seq_.pattern.path_for(f) : e.file()) + ": " + e.what() +
                       "; left out of the temporal window");
+          unreadable_.insert(f);
           continue;
         }
       }
@@ -136,11 +138,16 @@ FrameSource::Result FrameSource::ema(int frame) {
     start = std::max(0, target - preroll);
   }
   for (int i = start; i < target; ++i) {
+    if (unreadable_.count(disk[i])) {
+      ema_valid_ = false;  // warned about once, not tried again
+      continue;
+    }
     try {
       ema_step(i, light(disk[i]));
     } catch (const Error& e) {
       log_warning((e.file().empty() ? seq_.pattern.path_for(disk[i]) : e.file()) + ": " + e.what() +
                   "; the running average starts again after it");
+      unreadable_.insert(disk[i]);
       ema_valid_ = false;
     }
   }
