@@ -7,6 +7,7 @@
 
 #include "commands.h"
 #include "run_options.h"
+#include "ssgi/io.h"
 #include "ssgi/layout.h"
 #include "ssgi/pipeline.h"
 #include "ssgi/simd.h"
@@ -44,7 +45,14 @@ struct Report {
   std::string preset;                                         // --preset, resolved
   std::vector<std::pair<std::string, std::string>> settings;  // with the options applied
   std::optional<ssgi::Plan> plan;
-  std::optional<ssgi::Error> problem;     // the first input problem, reported last
+  std::optional<ssgi::Error> problem;  // the first input problem, reported last
+  // --check: each frame decoded as run would (error empty when it read), and the environment.
+  struct FrameCheck {
+    int frame;
+    std::string file, error;
+  };
+  std::optional<std::vector<FrameCheck>> checks;
+  std::string environment_error;
   ssgi::ThreadBudget threads;             // how many worker threads a run would use, and why
   std::string simd;                       // the kernels' instruction set
   std::vector<std::string> simd_targets;  // what --simd accepts here
@@ -52,6 +60,24 @@ struct Report {
 
 Json window_json(const ssgi::Box2i& b) {
   return Json{{"x_min", b.x0}, {"y_min", b.y0}, {"x_max", b.x1 - 1}, {"y_max", b.y1 - 1}};
+}
+
+// "file: what", as the error line names it.
+std::string error_text(const ssgi::Error& e) {
+  return e.file().empty() ? e.what() : e.file() + ": " + e.what();
+}
+
+// --check's findings: null without it.
+Json check_json(const Report& r) {
+  if (!r.checks) return nullptr;
+  Json failed = Json::array();
+  for (const Report::FrameCheck& c : *r.checks)
+    if (!c.error.empty())
+      failed.push_back({{"frame", c.frame}, {"file", c.file}, {"error", c.error}});
+  return {{"frames", r.checks->size()},
+          {"read", r.checks->size() - failed.size()},
+          {"failed", failed},
+          {"environment", r.environment_error.empty() ? Json("ok") : Json(r.environment_error)}};
 }
 
 void print_json(const ssgi::InputOptions& in, const ssgi::SequenceInfo& seq, const Report& r) {
@@ -92,7 +118,8 @@ void print_json(const ssgi::InputOptions& in, const ssgi::SequenceInfo& seq, con
       {"threads", {{"count", r.threads.threads}, {"from", r.threads.source}}},
       {"simd", {{"target", r.simd}, {"available", r.simd_targets}}},
       {"plan", r.plan ? Json(r.plan->reasons) : Json(nullptr)},
-      {"error", r.problem ? Json(r.problem->what()) : Json(nullptr)},
+      {"check", check_json(r)},
+      {"error", r.problem ? Json(error_text(*r.problem)) : Json(nullptr)},
   };
   std::printf("%s\n", out.dump(2).c_str());
 }
@@ -138,6 +165,17 @@ void print_text(const ssgi::InputOptions& in, const ssgi::SequenceInfo& seq, con
   std::string targets;
   for (const std::string& t : r.simd_targets) targets += (targets.empty() ? "" : ", ") + t;
   std::printf("simd:          %s (--simd: %s)\n", r.simd.c_str(), targets.c_str());
+  if (r.checks) {
+    std::size_t read = 0;
+    for (const Report::FrameCheck& c : *r.checks) read += c.error.empty();
+    std::printf("check:         %zu of %zu frames read as run reads them%s\n", read,
+                r.checks->size(),
+                r.environment_error.empty() ? "" : "; the environment map cannot be used");
+    for (const Report::FrameCheck& c : *r.checks)
+      if (!c.error.empty())
+        std::printf("  frame %-6d %s: %s\n", c.frame, c.file.c_str(), c.error.c_str());
+    if (!r.environment_error.empty()) std::printf("  %s\n", r.environment_error.c_str());
+  }
   std::printf("plan:\n");
   if (r.plan) {
     for (const std::string& reason : r.plan->reasons) std::printf("  %s\n", reason.c_str());
@@ -157,7 +195,15 @@ int run_info(int argc, char** argv) {
   install_log_handler(o.verbose, o.quiet);
   const ssgi::ThreadLimit threads(o.threads);
   const ssgi::InputOptions& in = o.run.input;
-  const ssgi::SequenceInfo seq = ssgi::open_sequence(in);
+  ssgi::SequenceInfo seq;
+  try {
+    seq = ssgi::open_sequence(in);
+  } catch (const ssgi::Error& e) {
+    // With --json a machine still gets a document: the error alone.
+    if (o.json && e.kind() != ssgi::ErrorKind::kUsage)
+      std::printf("%s\n", Json{{"error", error_text(e)}}.dump(2).c_str());
+    throw;
+  }
   // Bad option values fail before anything is printed; input problems (no camera, no direct
   // light) are reported in their place and the report goes on, then exit with the first one.
   Report r;
@@ -185,6 +231,30 @@ int run_info(int argc, char** argv) {
     } catch (const ssgi::Error& e) {
       r.cameras.push_back({f, std::nullopt, e.what()});
       if (!r.problem) r.problem = e;
+    }
+  }
+  if (o.check) {
+    // What run does before computing: the environment map, then each frame's passes.
+    r.checks.emplace();
+    std::optional<ssgi::Pipeline> pipeline;
+    try {
+      pipeline.emplace(seq, o.run.gi);
+    } catch (const ssgi::Error& e) {
+      if (e.kind() == ssgi::ErrorKind::kUsage) throw;
+      r.environment_error = error_text(e);
+      if (!r.problem) r.problem = e;
+    }
+    const ssgi::RoleMask roles = r.plan ? r.plan->roles : 0;
+    for (int f : seq.frames) {
+      Report::FrameCheck c{f, seq.pattern.path_for(f), {}};
+      try {
+        ssgi::read_gbuffer(seq, f, roles, in);
+      } catch (const ssgi::Error& e) {
+        if (!e.file().empty()) c.file = e.file();
+        c.error = e.what();
+        if (!r.problem) r.problem = e;
+      }
+      r.checks->push_back(std::move(c));
     }
   }
   if (o.json)

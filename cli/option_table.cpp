@@ -168,6 +168,10 @@ const std::vector<OptionSpec> kTable = {
      "per-frame read_ms, gi_ms, write_ms, the settings and the run's summary", nullptr},
     {kJson, "json", 0, nullptr, OptionGroup::kOutput, kInfoCommand, "the report as JSON on stdout",
      nullptr},
+    {kCheck, "check", 0, nullptr, OptionGroup::kGeneral, kInfoCommand,
+     "also decode every frame as run would and load the environment map, computing nothing: "
+     "what run would fail on fails here",
+     nullptr},
     // general
     {kFailFast, "fail-fast", 0, nullptr, OptionGroup::kGeneral, kRunCommand | kReferenceCommand,
      "stop at the first frame that fails (default: write the others, exit 1)", nullptr},

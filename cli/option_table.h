@@ -64,6 +64,7 @@ enum OptionId : int {
   kNoClobber,
   kProgress,
   kSimd,
+  kCheck,
 };
 
 enum class OptionGroup { kInput, kGi, kOutput, kGeneral };

@@ -233,6 +233,9 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
       case kJson:
         o.json = true;
         break;
+      case kCheck:
+        o.check = true;
+        break;
       case kStats:
         if (*a == '\0') ssgi::throw_usage("--stats needs a file name");
         o.stats = a;

@@ -19,6 +19,7 @@ struct CommonOptions {
   bool help = false;
   std::string command_line;        // the whole invocation, for provenance
   bool json = false;               // --json (ssgi info)
+  bool check = false;              // --check (ssgi info)
   std::string stats;               // --stats FILE.json (ssgi run)
   std::string preset = "default";  // --preset
   std::string progress = "auto";   // --progress auto|lines|openjd|deadline

@@ -1623,4 +1623,51 @@ TEST_F(Cli, AnUnreadableNeighbourIsWarnedAboutOnce) {
   EXPECT_EQ(r.err_lines().back(), "ssgi: 4 of 5 frames written, 1 failed (3)");
 }
 
+TEST_F(Cli, InfoCheckDecodesEveryFrameAsRunWould) {
+  // What info alone passes (it reads headers) and run then fails on: a resolution change, a
+  // truncated frame, an environment map that is not there. --check finds each, with run's
+  // status.
+  const CliResult plain = run_ssgi({"info", testdata("bad/resize.####.exr")});
+  EXPECT_EQ(plain.exit_code, 0) << plain.err;
+  const CliResult resize = run_ssgi({"info", testdata("bad/resize.####.exr"), "--check"});
+  EXPECT_EQ(resize.exit_code, 3);
+  EXPECT_NE(resize.out.find("check:         1 of 2 frames read as run reads them\n  frame 2      " +
+                            testdata("bad/resize.0002.exr") + ": display window 32x24 differs"),
+            std::string::npos)
+      << resize.out;
+  for (int f = 1; f <= 3; ++f)
+    fs::copy_file(testdata("sample/sample.000" + std::to_string(f) + ".exr"),
+                  path("in.000" + std::to_string(f) + ".exr"));
+  {
+    const std::string bytes = file_bytes(path("in.0002.exr"));
+    std::ofstream(path("in.0002.exr"), std::ios::binary | std::ios::trunc)
+        << bytes.substr(0, bytes.size() / 2);
+  }
+  const CliResult cut = run_ssgi({"info", path("in.####.exr"), "--check", "--json"});
+  EXPECT_EQ(cut.exit_code, 4) << cut.err;
+  const nlohmann::json j = nlohmann::json::parse(cut.out);
+  EXPECT_EQ(j["check"]["frames"], 3);
+  EXPECT_EQ(j["check"]["read"], 2);
+  ASSERT_EQ(j["check"]["failed"].size(), 1u);
+  EXPECT_EQ(j["check"]["failed"][0]["frame"], 2);
+  EXPECT_EQ(j["error"].get<std::string>().rfind(path("in.0002.exr") + ": ", 0), 0u) << j["error"];
+  expect_one_error(cut, path("in.0002.exr"), "");
+  const CliResult env = run_ssgi(
+      {"info", testdata("sample/sample.####.exr"), "--check", "--env", path("nowhere.exr")});
+  EXPECT_EQ(env.exit_code, 4) << env.err;
+  EXPECT_NE(env.out.find("6 of 6 frames read as run reads them; the environment map cannot be "
+                         "used"),
+            std::string::npos)
+      << env.out;
+  const CliResult ok = run_ssgi({"info", testdata("sample/sample.####.exr"), "--check"});
+  EXPECT_EQ(ok.exit_code, 0) << ok.err;
+  EXPECT_NE(ok.out.find("check:         6 of 6 frames read as run reads them\n"),
+            std::string::npos);
+  // A sequence that cannot even be opened: --json still prints a document, the error.
+  const CliResult none = run_ssgi({"info", path("nothing.####.exr"), "--json"});
+  EXPECT_EQ(none.exit_code, 4);
+  EXPECT_EQ(nlohmann::json::parse(none.out)["error"],
+            path("nothing.####.exr") + ": no files match this pattern");
+}
+
 }  // namespace
