@@ -1,5 +1,6 @@
 // End-to-end tests of the `ssgi` command line: the built binary on the committed fixtures, its
 // exit codes, its one-line errors, and the files it writes (or does not write).
+#include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
 #include <fcntl.h>
 #include <gtest/gtest.h>
@@ -1668,6 +1669,37 @@ TEST_F(Cli, InfoCheckDecodesEveryFrameAsRunWould) {
   EXPECT_EQ(none.exit_code, 4);
   EXPECT_EQ(nlohmann::json::parse(none.out)["error"],
             path("nothing.####.exr") + ": no files match this pattern");
+}
+
+TEST_F(Cli, ExtremeSizesRunAndStayFinite) {
+  // The sample frame box-filtered to sizes that stress the trace grid and the pyramid: one
+  // pixel, one row or column (no triangle: nothing to hit, so no light), odd sizes, an image
+  // smaller than the denoiser's kernel. Each runs, and ssgi's layers are finite.
+  const OIIO::ImageBuf source(testdata("sample/sample.0001.exr"));
+  struct Size {
+    int w, h;
+    bool lit;  // two rows and columns at least: some light is found
+  };
+  for (const Size& size : {Size{1, 1, false}, Size{1, 4096, false}, Size{4096, 1, false},
+                           Size{1023, 1, false}, Size{7, 5, true}, Size{3, 3, true}}) {
+    const std::string name = std::to_string(size.w) + "x" + std::to_string(size.h);
+    OIIO::ImageBuf small = OIIO::ImageBufAlgo::resize(
+        source, "box", 0.0f, OIIO::ROI(0, size.w, 0, size.h, 0, 1, 0, source.nchannels()));
+    ASSERT_FALSE(small.has_error()) << small.geterror();
+    ASSERT_TRUE(small.write(path("in" + name + ".0001.exr"))) << small.geterror();
+    const CliResult r = run_ssgi(
+        {"run", path("in" + name + ".0001.exr"), "-o", path("o" + name + ".0001.exr"), "-q"});
+    ASSERT_EQ(r.exit_code, 0) << name << ": " << r.err;
+    const ExrImage out = read_exr(path("o" + name + ".0001.exr"));
+    EXPECT_EQ(out.spec.width, size.w);
+    float brightest = 0;
+    for (const std::string& c : kOurChannels)
+      for (float v : out.planes.at(c)) {
+        ASSERT_TRUE(std::isfinite(v)) << name << " " << c;
+        if (c.rfind("indirect.", 0) == 0) brightest = std::max(brightest, v);
+      }
+    EXPECT_EQ(brightest > 0, size.lit) << name;
+  }
 }
 
 }  // namespace
