@@ -17,6 +17,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
@@ -1699,6 +1700,60 @@ TEST_F(Cli, ExtremeSizesRunAndStayFinite) {
         if (c.rfind("indirect.", 0) == 0) brightest = std::max(brightest, v);
       }
     EXPECT_EQ(brightest > 0, size.lit) << name;
+  }
+}
+
+TEST_F(Cli, ExtremeValuesRunFiniteAndPassThroughUntouched) {
+  // Values renderers write and values broken files hold, each in every 5th pixel of one pass
+  // of the sample frame: the run succeeds, ssgi's layers are finite (and still lit), and the
+  // input's channels come out as they went in, bit for bit (NaN payloads included).
+  const float inf = std::numeric_limits<float>::infinity();
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float denormal = std::numeric_limits<float>::denorm_min();
+  struct Case {
+    std::string name;
+    std::vector<std::string> channels;
+    std::vector<float> values;  // cycled over the pixels changed
+  };
+  const std::string d = "ViewLayer.Depth.Z";
+  const std::vector<std::string> normal = {"ViewLayer.Normal.X", "ViewLayer.Normal.Y",
+                                           "ViewLayer.Normal.Z"};
+  const std::vector<std::string> albedo = {"ViewLayer.DiffCol.R", "ViewLayer.DiffCol.G",
+                                           "ViewLayer.DiffCol.B"};
+  const std::vector<std::string> direct = {"ViewLayer.DiffDir.R", "ViewLayer.DiffDir.G",
+                                           "ViewLayer.DiffDir.B"};
+  const std::vector<Case> cases = {
+      {"depth", {d}, {1e-5f, 1e10f, 0.0f, -3.0f, inf, nan, 1e30f, 1e7f}},
+      {"normal_zero", normal, {0.0f}},
+      {"normal_odd", normal, {5.0f, nan, -1.0f, 1e-30f}},
+      {"albedo", albedo, {denormal, 1e30f, inf, nan, -2.0f, 7.0f}},
+      {"direct", direct, {denormal, 1e30f, inf, nan, -2.0f, 1e-38f}},
+  };
+  const ExrImage source = read_exr(testdata("sample/sample.0001.exr"));
+  for (const Case& c : cases) {
+    ExrImage in = source;
+    std::size_t k = 0;
+    for (std::size_t p = 0; p < in.planes.at(d).size(); p += 5, ++k)
+      for (const std::string& ch : c.channels) in.planes.at(ch)[p] = c.values[k % c.values.size()];
+    const std::string name = "in_" + c.name + ".0001.exr";
+    write_exr(path(name), in);
+    const ExrImage written = read_exr(path(name));
+    const CliResult r = run_ssgi({"run", path(name), "-o", path("o_" + c.name + ".0001.exr")});
+    ASSERT_EQ(r.exit_code, 0) << c.name << ": " << r.err;
+    const ExrImage out = read_exr(path("o_" + c.name + ".0001.exr"));
+    float brightest = 0;
+    for (const std::string& ch : kOurChannels)
+      for (float v : out.planes.at(ch)) {
+        ASSERT_TRUE(std::isfinite(v)) << c.name << " " << ch;
+        if (ch == "indirect.G") brightest = std::max(brightest, v);
+      }
+    EXPECT_GT(brightest, 0.0f) << c.name;
+    for (const auto& [ch, plane] : written.planes) {
+      const std::vector<float>& passed = out.planes.at(ch);
+      ASSERT_EQ(passed.size(), plane.size());
+      EXPECT_EQ(std::memcmp(passed.data(), plane.data(), plane.size() * sizeof(float)), 0)
+          << c.name << " " << ch;
+    }
   }
 }
 
