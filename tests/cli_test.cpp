@@ -1757,4 +1757,42 @@ TEST_F(Cli, ExtremeValuesRunFiniteAndPassThroughUntouched) {
   }
 }
 
+TEST_F(Cli, ExtremeCamerasAndMotionRunFinite) {
+  // Fields of view of 0.1 and 179 degrees, and motion vectors that are huge or NaN in every
+  // 3rd pixel of a three-frame shot with the temporal window: finite, lit layers.
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (int f = 1; f <= 3; ++f) {
+    ExrImage in = read_exr(testdata("sample/sample.000" + std::to_string(f) + ".exr"));
+    const float values[] = {1e30f, -1e6f, nan, 1e-30f};
+    std::size_t k = 0;
+    for (const char* ch :
+         {"ViewLayer.Vector.X", "ViewLayer.Vector.Y", "ViewLayer.Vector.Z", "ViewLayer.Vector.W"})
+      for (std::size_t p = 0; p < in.planes.at(ch).size(); p += 3, ++k)
+        in.planes.at(ch)[p] = values[k % 4];
+    write_exr(path("in.000" + std::to_string(f) + ".exr"), in);
+  }
+  const std::vector<std::vector<std::string>> runs = {
+      {"--fov", "0.1", "-o", path("narrow.####.exr")},
+      {"--fov", "179", "-o", path("wide.####.exr")},
+      {"-o", path("motion.####.exr")}};
+  for (const std::vector<std::string>& extra : runs) {
+    std::vector<std::string> args = {"run", path("in.####.exr"), "-q"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const CliResult r = run_ssgi(args);
+    ASSERT_EQ(r.exit_code, 0) << extra.back() << ": " << r.err;
+    for (int f = 1; f <= 3; ++f) {
+      std::string out = extra.back();
+      out.replace(out.find("####"), 4, "000" + std::to_string(f));
+      const ExrImage image = read_exr(out);
+      float brightest = 0;
+      for (const std::string& ch : kOurChannels)
+        for (float v : image.planes.at(ch)) {
+          ASSERT_TRUE(std::isfinite(v)) << out << " " << ch;
+          if (ch == "indirect.G") brightest = std::max(brightest, v);
+        }
+      EXPECT_GT(brightest, 0.0f) << out;
+    }
+  }
+}
+
 }  // namespace
