@@ -1795,4 +1795,21 @@ TEST_F(Cli, ExtremeCamerasAndMotionRunFinite) {
   }
 }
 
+TEST_F(Cli, DeepFilesAreRefusedWithTheReason) {
+  // Deep scanline and deep tiled frames: exit 3, one line saying that deep is not read yet and
+  // how to flatten, nothing written.
+  const OIIO::ImageBuf flat(testdata("sample/sample.0001.exr"));
+  OIIO::ImageBuf deep = OIIO::ImageBufAlgo::deepen(flat);
+  ASSERT_FALSE(deep.has_error()) << deep.geterror();
+  ASSERT_TRUE(deep.write(path("deep.exr"))) << deep.geterror();
+  deep.set_write_tiles(16, 16);
+  ASSERT_TRUE(deep.write(path("deeptiled.exr"))) << deep.geterror();
+  for (const char* name : {"deep.exr", "deeptiled.exr"}) {
+    const CliResult r = run_ssgi({"run", path(name), "-o", path(std::string("o_") + name)});
+    EXPECT_EQ(r.exit_code, 3) << name << ": " << r.err;
+    expect_one_error(r, path(name), "holds deep data, which ssgi does not read yet: flatten it");
+  }
+  EXPECT_EQ(entries(), (std::set<std::string>{"deep.exr", "deeptiled.exr"}));
+}
+
 }  // namespace

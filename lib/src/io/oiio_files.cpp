@@ -36,6 +36,10 @@ std::vector<std::vector<float>> read_float_planes(OIIO::ImageInput& in, int subi
   if (!in.seek_subimage(subimage, 0))
     throw_io(path, "cannot read part " + std::to_string(subimage));
   const OIIO::ImageSpec& spec = in.spec();
+  if (spec.deep)
+    throw_input(path, "part " + std::to_string(subimage) +
+                          " holds deep data, which ssgi does not read yet: flatten it first "
+                          "(oiiotool IN --flatten -o OUT)");
   const int lo = *std::min_element(indices.begin(), indices.end());
   const int hi = *std::max_element(indices.begin(), indices.end());
   assert(lo >= 0 && hi < spec.nchannels);
