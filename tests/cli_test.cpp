@@ -7,6 +7,7 @@
 #include <poll.h>
 #include <pty.h>
 #include <spawn.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -1810,6 +1811,35 @@ TEST_F(Cli, DeepFilesAreRefusedWithTheReason) {
     expect_one_error(r, path(name), "holds deep data, which ssgi does not read yet: flatten it");
   }
   EXPECT_EQ(entries(), (std::set<std::string>{"deep.exr", "deeptiled.exr"}));
+}
+
+TEST_F(Cli, AFifoOrADirectoryWhereAFrameShouldBeIsRefusedAtOnce) {
+  // Opening a FIFO blocks until something writes to it: it must be refused, not waited on. The
+  // same for an environment map.
+  ASSERT_EQ(::mkfifo(path("fifo.0001.exr").c_str(), 0600), 0);
+  fs::create_directory(path("dir.0001.exr"));
+  struct Case {
+    std::vector<std::string> args;
+    std::string file, phrase;
+  };
+  const std::vector<Case> cases = {
+      {{"run", path("fifo.0001.exr"), "-o", path("o.0001.exr")},
+       path("fifo.0001.exr"),
+       "is not a regular file (a FIFO, socket or device)"},
+      {{"run", path("dir.0001.exr"), "-o", path("o.0001.exr")},
+       path("dir.0001.exr"),
+       "is a directory"},
+      {{"run", testdata("sample/sample.0001.exr"), "-o", path("o.0001.exr"), "--env",
+        path("fifo.0001.exr")},
+       path("fifo.0001.exr"),
+       "is not a regular file"},
+  };
+  for (const Case& c : cases) {
+    const CliResult r = run_ssgi(c.args);  // returns: nothing blocked
+    EXPECT_EQ(r.exit_code, 4) << r.err;
+    expect_one_error(r, c.file, c.phrase);
+  }
+  EXPECT_EQ(entries(), (std::set<std::string>{"fifo.0001.exr", "dir.0001.exr"}));
 }
 
 }  // namespace

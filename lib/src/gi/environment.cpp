@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "oiio_files.h"
 #include "ssgi/error.h"
 
 namespace ssgi::detail {
@@ -13,8 +14,7 @@ namespace ssgi::detail {
 Environment::Environment(std::array<float, 3> color) : color_(color) {}
 
 Environment Environment::from_file(const std::string& path, char up) {
-  auto in = OIIO::ImageInput::open(path);
-  if (!in) throw_io(path, "cannot read environment map: " + OIIO::geterror());
+  auto in = open_image(path);  // a clear error for a missing, empty or special file
   const OIIO::ImageSpec spec = in->spec();
   if (spec.nchannels < 3) throw_input(path, "environment map needs R, G, B channels");
   if (spec.width != 2 * spec.height)

@@ -23,6 +23,9 @@ std::unique_ptr<OIIO::ImageInput> open_image(const std::string& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw_io(path, "no such file");
   if (fs::is_directory(path, ec)) throw_io(path, "is a directory, not an image");
+  // A FIFO would block the open until something writes to it; a device is no image either.
+  if (!fs::is_regular_file(path, ec))
+    throw_io(path, "is not a regular file (a FIFO, socket or device), not an image");
   if (fs::file_size(path, ec) == 0) throw_io(path, "empty file");
   auto in = OIIO::ImageInput::open(path);
   if (!in) throw_io(path, "cannot read image: " + one_line(OIIO::geterror()));
