@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <csignal>
 #include <cstring>
@@ -1840,6 +1841,40 @@ TEST_F(Cli, AFifoOrADirectoryWhereAFrameShouldBeIsRefusedAtOnce) {
     expect_one_error(r, c.file, c.phrase);
   }
   EXPECT_EQ(entries(), (std::set<std::string>{"fifo.0001.exr", "dir.0001.exr"}));
+}
+
+TEST_F(Cli, HostileHeadersAreRefusedWithOneLine) {
+  // The sample frame with its header edited: a 1e6 x 1e6 data window (and display window),
+  // and a data window moved wholly outside the display window. One line each, no output.
+  const std::string bytes = file_bytes(testdata("sample/sample.0001.exr"));
+  auto with_window = [&](const std::string& attribute, std::array<std::int32_t, 4> box,
+                         std::string data) {
+    const std::string key = attribute + std::string("\0box2i\0", 7);
+    const std::size_t at = data.find(key);
+    EXPECT_NE(at, std::string::npos) << attribute;
+    std::memcpy(&data[at + key.size() + 4], box.data(), sizeof box);  // after the size field
+    return data;
+  };
+  const std::array<std::int32_t, 4> huge = {0, 0, 999999, 999999};
+  std::ofstream(path("huge.0001.exr"), std::ios::binary)
+      << with_window("displayWindow", huge, with_window("dataWindow", huge, bytes));
+  OIIO::ImageBuf moved(testdata("sample/sample.0001.exr"));
+  moved.set_origin(5000, 5000);
+  ASSERT_TRUE(moved.write(path("moved.0001.exr"))) << moved.geterror();
+  struct Case {
+    std::string file;
+    int exit_code;
+    std::string phrase;
+  };
+  for (const Case& c : {Case{"huge.0001.exr", 4, "cannot read image"},
+                        Case{"moved.0001.exr", 3,
+                             "data window (5000,5000)-(5095,5063) lies wholly outside the "
+                             "display window (0,0)-(95,63)"}}) {
+    const CliResult r = run_ssgi({"run", path(c.file), "-o", path("o_" + c.file)});
+    EXPECT_EQ(r.exit_code, c.exit_code) << c.file << ": " << r.err;
+    expect_one_error(r, path(c.file), c.phrase);
+  }
+  EXPECT_EQ(entries(), (std::set<std::string>{"huge.0001.exr", "moved.0001.exr"}));
 }
 
 }  // namespace

@@ -332,6 +332,16 @@ SequenceInfo open_sequence(const InputOptions& options) {
   seq.display_window = display_window_of(spec);
   seq.data_window = data_window_of(spec);
   if (seq.data_window.empty()) throw_input(first, "data window is empty (zero pixels)");
+  const Box2i& dw = seq.data_window;
+  const Box2i& fw = seq.display_window;
+  if (dw.x1 <= fw.x0 || dw.x0 >= fw.x1 || dw.y1 <= fw.y0 || dw.y0 >= fw.y1) {
+    auto corners = [](const Box2i& b) {
+      return "(" + std::to_string(b.x0) + "," + std::to_string(b.y0) + ")-(" +
+             std::to_string(b.x1 - 1) + "," + std::to_string(b.y1 - 1) + ")";
+    };
+    throw_input(first, "data window " + corners(dw) + " lies wholly outside the display window " +
+                           corners(fw) + ": none of its pixels is in the picture");
+  }
   seq.pixel_aspect = spec.get_float_attribute("PixelAspectRatio", 1.0f);
   if (!(seq.pixel_aspect > 0) || !std::isfinite(seq.pixel_aspect)) seq.pixel_aspect = 1.0;
   seq.layout = resolve_layout(seq.channels, options.layout, options.channel_overrides, first);
