@@ -1877,4 +1877,24 @@ TEST_F(Cli, HostileHeadersAreRefusedWithOneLine) {
   EXPECT_EQ(entries(), (std::set<std::string>{"huge.0001.exr", "moved.0001.exr"}));
 }
 
+TEST_F(Cli, AThousandChannelsRunAndPassThrough) {
+  // The sample frame with 973 more channels (1000 in all): it runs, and every one of them is in
+  // the output with its values.
+  ExrImage in = read_exr(testdata("sample/sample.0001.exr"));
+  const std::size_t pixels = in.planes.begin()->second.size();
+  for (int c = static_cast<int>(in.planes.size()); c < 1000; ++c) {
+    std::vector<float> plane(pixels);
+    for (std::size_t p = 0; p < pixels; ++p) plane[p] = static_cast<float>(c) + 1e-3f * p;
+    in.planes["extra." + std::to_string(c)] = std::move(plane);
+    in.spec.channelnames.push_back("extra." + std::to_string(c));
+  }
+  ASSERT_EQ(in.planes.size(), 1000u);
+  write_exr(path("wide.0001.exr"), in);
+  const CliResult r = run_ssgi({"run", path("wide.0001.exr"), "-o", path("o.0001.exr"), "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const ExrImage out = read_exr(path("o.0001.exr"));
+  EXPECT_EQ(out.planes.size(), 1000u + kOurChannels.size());
+  for (const auto& [name, plane] : in.planes) EXPECT_EQ(out.planes.at(name), plane) << name;
+}
+
 }  // namespace
