@@ -70,18 +70,24 @@ std::vector<Tick> linear_axis(double lo, double hi, Axis* axis) {
   return ticks;
 }
 
-// A logarithmic axis over [lo, hi] padded by 15% each side, ticks at 1, 2, 5 x 10^k.
+// A logarithmic axis over [lo, hi] padded by 15% each side, ticks at 1, 2, 5 x 10^k, or at
+// every digit times 10^k when that gives fewer than 4.
 std::vector<Tick> log_axis(double lo, double hi, Axis* axis) {
   axis->lo = lo / 1.15;
   axis->hi = hi * 1.15;
   axis->log = true;
   std::vector<Tick> ticks;
-  for (int k = static_cast<int>(std::floor(std::log10(axis->lo)));
-       k <= static_cast<int>(std::ceil(std::log10(axis->hi))); ++k) {
-    for (double m : {1.0, 2.0, 5.0}) {
-      const double v = m * std::pow(10.0, k);
-      if (v >= axis->lo && v <= axis->hi) ticks.push_back({v, tick_text(v, std::pow(10.0, k))});
+  for (const std::vector<double>& mantissas :
+       {std::vector<double>{1, 2, 5}, std::vector<double>{1, 2, 3, 4, 5, 6, 7, 8, 9}}) {
+    ticks.clear();
+    for (int k = static_cast<int>(std::floor(std::log10(axis->lo)));
+         k <= static_cast<int>(std::ceil(std::log10(axis->hi))); ++k) {
+      for (double m : mantissas) {
+        const double v = m * std::pow(10.0, k);
+        if (v >= axis->lo && v <= axis->hi) ticks.push_back({v, tick_text(v, std::pow(10.0, k))});
+      }
     }
+    if (ticks.size() >= 4) break;
   }
   return ticks;
 }
@@ -160,14 +166,38 @@ void write_sweep_plot(const std::vector<PlotPoint>& points, const PlotText& text
     last_y = py;
   }
 
-  // The legend, top right inside the plot area.
+  // Markers, then the legend in the first inner corner that covers none (else top right),
+  // then labels placed where they overlap no marker, label or the legend: right, left, above,
+  // below the point, then further out.
   std::vector<Rect> taken;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const double px = x.to_pixel(points[i].ms), py = y.to_pixel(points[i].error);
+    if (front[i])
+      canvas.disk(px, py, 6, kFront);
+    else
+      canvas.ring(px, py, 5.5, 2, kDominated);
+    taken.push_back({static_cast<int>(px) - 7, static_cast<int>(py) - 7, static_cast<int>(px) + 8,
+                     static_cast<int>(py) + 8});
+  }
   {
     const std::string front_text = "Pareto front: no other run is both faster and closer";
     const std::string other_text = "another run is faster and closer";
     const int w =
         std::max(canvas.measure(front_text, 15).width, canvas.measure(other_text, 15).width) + 50;
-    const Rect legend{kRight - w - 12, kTop + 12, kRight - 12, kTop + 70};
+    constexpr int kHeight = 58, kInset = 12;
+    const Rect corners[] = {
+        {kRight - kInset - w, kTop + kInset, kRight - kInset, kTop + kInset + kHeight},
+        {kRight - kInset - w, kBottom - kInset - kHeight, kRight - kInset, kBottom - kInset},
+        {kLeft + kInset, kTop + kInset, kLeft + kInset + w, kTop + kInset + kHeight},
+        {kLeft + kInset, kBottom - kInset - kHeight, kLeft + kInset + w, kBottom - kInset},
+    };
+    Rect legend = corners[0];
+    for (const Rect& r : corners) {
+      if (std::none_of(taken.begin(), taken.end(), [&](const Rect& t) { return t.overlaps(r); })) {
+        legend = r;
+        break;
+      }
+    }
     canvas.box(legend.x0, legend.y0, legend.x1, legend.y1, kWhite, true);
     canvas.box(legend.x0, legend.y0, legend.x1, legend.y1, kGridLine, false);
     canvas.disk(legend.x0 + 20, legend.y0 + 18, 6, kFront);
@@ -177,18 +207,6 @@ void write_sweep_plot(const std::vector<PlotPoint>& points, const PlotText& text
     canvas.text(legend.x0 + 38, legend.y0 + 41, other_text, 15, kInk, Align::kStart,
                 Align::kCenter);
     taken.push_back(legend);
-  }
-
-  // Markers, then labels placed where they overlap no marker, label or the legend: right,
-  // left, above, below the point, then further out.
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const double px = x.to_pixel(points[i].ms), py = y.to_pixel(points[i].error);
-    if (front[i])
-      canvas.disk(px, py, 6, kFront);
-    else
-      canvas.ring(px, py, 5.5, 2, kDominated);
-    taken.push_back({static_cast<int>(px) - 7, static_cast<int>(py) - 7, static_cast<int>(px) + 8,
-                     static_cast<int>(py) + 8});
   }
   for (std::size_t i = 0; i < points.size(); ++i) {
     const int px = static_cast<int>(std::lround(x.to_pixel(points[i].ms)));
@@ -217,6 +235,8 @@ void write_sweep_plot(const std::vector<PlotPoint>& points, const PlotText& text
       }
       if (placed) break;
     }
+    // On paper of its own, so that the front's line never runs through the letters.
+    canvas.box(chosen.x0 - 2, chosen.y0 - 1, chosen.x1 + 1, chosen.y1 + 1, kWhite, true);
     canvas.text(chosen.x0, chosen.y0, points[i].label, 15, front[i] ? kFront : kInk);
     taken.push_back(chosen);
   }
