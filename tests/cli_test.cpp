@@ -1596,7 +1596,7 @@ TEST_F(Cli, SweepTimesAndMeasuresEachPresetAndDrawsThePlot) {
   // The scratch frames are gone, and nothing but the three outputs is left.
   EXPECT_EQ(entries(), (std::set<std::string>{"t.csv", "t.json", "t.png", "tmp"}));
   EXPECT_TRUE(fs::is_empty(path("tmp")));
-  EXPECT_NE(r.err.find("ssgi: run 2/2 final: "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("ssgi: round 1/3, run 2/2 final: "), std::string::npos) << r.err;
 
   const auto csv = read_csv(path("t.csv"));
   ASSERT_EQ(csv.size(), 3u);
