@@ -186,7 +186,7 @@ const std::vector<OptionSpec> kTable = {
      "indirect light)",
      nullptr},
     {kRepeat, "repeat", 0, "N", OptionGroup::kGi, kSweepCommand,
-     "time each run N times, round by round; ms per frame is the median of all its frames",
+     "time each run N times, round by round; ms per frame is the fastest round's mean gi_ms",
      [](const RunOptions&) { return std::string("1"); }},
     {'o', "output", 'o', "FILE.csv", OptionGroup::kOutput, kSweepCommand,
      "the table: one row per run", nullptr},

@@ -1655,6 +1655,16 @@ TEST_F(Cli, SweepTimesAndMeasuresEachPresetAndDrawsThePlot) {
     const nlohmann::json& j = json["rows"][row];
     ASSERT_EQ(j["gi_ms"].size(), 6u);  // 2 frames x 3 rounds
     for (const auto& ms : j["gi_ms"]) EXPECT_GT(ms.get<double>(), 0.0);
+    // Time per frame: the mean over the frames of the fastest round.
+    ASSERT_EQ(j["round_ms"].size(), 3u);
+    double fastest = 1e30;
+    for (int round = 0; round < 3; ++round) {
+      const double round_mean =
+          0.5 * (j["gi_ms"][2 * round].get<double>() + j["gi_ms"][2 * round + 1].get<double>());
+      EXPECT_NEAR(j["round_ms"][round].get<double>(), round_mean, 1e-9);
+      fastest = std::min(fastest, round_mean);
+    }
+    EXPECT_DOUBLE_EQ(j["ms_per_frame"].get<double>(), fastest);
     EXPECT_NEAR(j["ms_per_frame"].get<double>(), value(row + 1, 2), 0.05);
     EXPECT_NEAR(j["relrmse_ref"].get<double>(), value(row + 1, 3), 5e-5);
     EXPECT_EQ(j["pareto"], true);  // one is faster, the other closer

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Makes the README's sweep tables and plots: `ssgi sweep` over each sample scene (every preset
-# and the grid, against the 256-ray reference and Cycles' DiffInd, three rounds of timing),
+# and the grid, against the 256-ray reference and Cycles' DiffInd, five rounds of timing),
 # written here as SCENE.csv, SCENE.json and SCENE.png. It builds nothing: run .ci/setup first.
 # Usage: tests/sweep/sample_data.sh [BUILD_DIR] [DATA_DIR]   (default: build ../shared/data)
 set -euo pipefail
@@ -9,6 +9,6 @@ build=${1:-"$root/build"}
 data=${2:-"$root/../shared/data"}
 out="$root/tests/sweep"
 for scene in room stage; do
-  "$build/bin/ssgi" sweep "$data/$scene/$scene.####.exr" --truth DiffInd --grid --repeat 3 \
+  "$build/bin/ssgi" sweep "$data/$scene/$scene.####.exr" --truth DiffInd --grid --repeat 5 \
     -o "$out/$scene.csv" --json "$out/$scene.json" --plot "$out/$scene.png"
 done
