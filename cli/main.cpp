@@ -27,6 +27,8 @@ const Subcommand kSubcommands[] = {
      ssgi_cli::run_compare},
     {"reference", "trace the converged answer with Embree, to measure run against",
      ssgi_cli::run_reference},
+    {"sweep", "time every preset on a shot against its error: a table and a plot",
+     ssgi_cli::run_sweep},
 };
 
 void print_usage(std::FILE* out) {

@@ -13,6 +13,8 @@ namespace {
 namespace Strutil = OIIO::Strutil;
 
 constexpr unsigned kPlanning = kRunCommand | kInfoCommand | kReferenceCommand;
+// The options that say what the input is, and the general ones: sweep takes these too.
+constexpr unsigned kReading = kPlanning | kSweepCommand;
 
 // A number as the help prints it: the shortest form that reads back as the same value.
 std::string number(double v) {
@@ -51,23 +53,23 @@ using ssgi::RunOptions;
 // cannot drift from the code.
 const std::vector<OptionSpec> kTable = {
     // input
-    {kFrames, "frames", 0, "LIST", OptionGroup::kInput, kPlanning,
+    {kFrames, "frames", 0, "LIST", OptionGroup::kInput, kReading,
      "frames to write: 1-50, 1-50x2, 3,7,9, -5--1 (default: the pattern's range, else every "
      "frame on disk)",
      nullptr},
-    {kSkipMissing, "skip-missing", 0, nullptr, OptionGroup::kInput, kPlanning,
+    {kSkipMissing, "skip-missing", 0, nullptr, OptionGroup::kInput, kReading,
      "skip missing frames with a warning instead of failing", nullptr},
-    {kLayout, "layout", 0, "NAME", OptionGroup::kInput, kPlanning,
+    {kLayout, "layout", 0, "NAME", OptionGroup::kInput, kReading,
      "channel layout preset (default: detected from the first frame)", nullptr},
-    {kChannel, "channel", 0, "ROLE=NAME", OptionGroup::kInput, kPlanning,
+    {kChannel, "channel", 0, "ROLE=NAME", OptionGroup::kInput, kReading,
      "take ROLE (depth, normal, albedo, direct, emission, motion, position, beauty) from layer "
      "NAME or channels A,B,C",
      nullptr},
-    {kDepthKind, "depth-kind", 0, "KIND", OptionGroup::kInput, kPlanning,
+    {kDepthKind, "depth-kind", 0, "KIND", OptionGroup::kInput, kReading,
      "planar, radial, inverse or negative (default: the layout's)", nullptr},
-    {kFov, "fov", 0, "DEGREES", OptionGroup::kInput, kPlanning,
+    {kFov, "fov", 0, "DEGREES", OptionGroup::kInput, kReading,
      "a static camera with this horizontal field of view", nullptr},
-    {kCamera, "camera", 0, "FILE.json", OptionGroup::kInput, kPlanning,
+    {kCamera, "camera", 0, "FILE.json", OptionGroup::kInput, kReading,
      "per-frame cameras from a sidecar file", nullptr},
     // gi
     {kPreset, "preset", 0, "P", OptionGroup::kGi, kRunCommand | kInfoCommand,
@@ -172,6 +174,30 @@ const std::vector<OptionSpec> kTable = {
      "also decode every frame as run would and load the environment map, computing nothing: "
      "what run would fail on fails here",
      nullptr},
+    // sweep
+    {kPresets, "presets", 0, "LIST", OptionGroup::kGi, kSweepCommand,
+     "the presets to run, comma-separated",
+     [](const RunOptions&) { return Strutil::join(ssgi::preset_names(), ","); }},
+    {kGrid, "grid", 0, nullptr, OptionGroup::kGi, kSweepCommand,
+     "also run 12 settings: slices 1, 2, 4 x max-steps 16, 28 x bounces 4, 8 (man ssgi)", nullptr},
+    {kReferenceSpp, "reference-spp", 0, "N", OptionGroup::kGi, kSweepCommand,
+     "rays per pixel and bounce of the Embree reference, 1 to 4096",
+     [](const RunOptions&) {
+       return std::to_string(subcommand_defaults(kReferenceCommand).gi.rays);
+     }},
+    {kTruth, "truth", 0, "LAYER", OptionGroup::kGi, kSweepCommand,
+     "measure against this R,G,B layer of the input too (e.g. DiffInd: Cycles' path-traced "
+     "indirect light)",
+     nullptr},
+    {kRepeat, "repeat", 0, "N", OptionGroup::kGi, kSweepCommand,
+     "time each run N times, round by round; ms per frame is the fastest round's mean gi_ms",
+     [](const RunOptions&) { return std::string("1"); }},
+    {'o', "output", 'o', "FILE.csv", OptionGroup::kOutput, kSweepCommand,
+     "the table: one row per run", nullptr},
+    {kSweepJson, "json", 0, "FILE", OptionGroup::kOutput, kSweepCommand,
+     "the table as JSON too, with each run's settings and frame timings", nullptr},
+    {kPlot, "plot", 0, "FILE.png", OptionGroup::kOutput, kSweepCommand,
+     "error against time per frame, 1200x800 pixels", nullptr},
     // general
     {kFailFast, "fail-fast", 0, nullptr, OptionGroup::kGeneral, kRunCommand | kReferenceCommand,
      "stop at the first frame that fails (default: write the others, exit 1)", nullptr},
@@ -186,17 +212,17 @@ const std::vector<OptionSpec> kTable = {
      "auto (a bar on a terminal, else a line per frame), lines, openjd (openjd_progress: lines "
      "on stdout) or deadline (Progress: N% on stdout)",
      [](const RunOptions&) { return std::string("auto"); }},
-    {kThreads, "threads", 0, "N", OptionGroup::kGeneral, kPlanning,
+    {kThreads, "threads", 0, "N", OptionGroup::kGeneral, kReading,
      "worker threads (default: the scheduler's allocation, else the CPUs allowed)", nullptr},
-    {kSimd, "simd", 0, "TARGET", OptionGroup::kGeneral, kPlanning,
+    {kSimd, "simd", 0, "TARGET", OptionGroup::kGeneral, kReading,
      "the kernels' instruction set: auto, a target this CPU has (avx2, sse4, ...; ssgi info "
      "lists them) or scalar; every one gives the same bits (default: $SSGI_SIMD, else auto)",
      nullptr},
-    {'v', "verbose", 'v', nullptr, OptionGroup::kGeneral, kPlanning,
+    {'v', "verbose", 'v', nullptr, OptionGroup::kGeneral, kReading,
      "print the plan and per-frame timings", nullptr},
-    {'q', "quiet", 'q', nullptr, OptionGroup::kGeneral, kPlanning, "no progress, no warnings",
+    {'q', "quiet", 'q', nullptr, OptionGroup::kGeneral, kReading, "no progress, no warnings",
      nullptr},
-    {'h', "help", 'h', nullptr, OptionGroup::kGeneral, kPlanning, "this help", nullptr},
+    {'h', "help", 'h', nullptr, OptionGroup::kGeneral, kReading, "this help", nullptr},
 };
 
 const char* group_name(OptionGroup g) {
@@ -224,7 +250,7 @@ std::string written_name(const std::string& written) {
 // The subcommands of `mask`, as "ssgi run or ssgi info".
 std::string subcommands_text(unsigned mask) {
   std::vector<std::string> names;
-  for (Subcommand s : {kRunCommand, kInfoCommand, kReferenceCommand})
+  for (Subcommand s : {kRunCommand, kInfoCommand, kReferenceCommand, kSweepCommand})
     if (mask & s) names.push_back(std::string("ssgi ") + subcommand_name(s));
   return Strutil::join(names, " or ");
 }
@@ -239,6 +265,8 @@ const char* subcommand_name(Subcommand s) {
       return "info";
     case kReferenceCommand:
       return "reference";
+    case kSweepCommand:
+      return "sweep";
   }
   return "";
 }

@@ -1,5 +1,5 @@
-// The options of ssgi run, info and reference in one table: name, argument, help, default and
-// which subcommands take each. It drives getopt_long (each subcommand registers only its own
+// The options of ssgi run, info, reference and sweep in one table: name, argument, help, default
+// and which subcommands take each. It drives getopt_long (each subcommand registers only its own
 // options), the --help text (defaults read from the code's own defaults, not written out), the
 // errors for unknown, ambiguous and misplaced options, and man/ssgi.1's check.
 #pragma once
@@ -13,7 +13,12 @@
 
 namespace ssgi_cli {
 
-enum Subcommand : unsigned { kRunCommand = 1u, kInfoCommand = 2u, kReferenceCommand = 4u };
+enum Subcommand : unsigned {
+  kRunCommand = 1u,
+  kInfoCommand = 2u,
+  kReferenceCommand = 4u,
+  kSweepCommand = 8u,
+};
 
 // The subcommand's name as the user types it ("run").
 const char* subcommand_name(Subcommand s);
@@ -65,6 +70,13 @@ enum OptionId : int {
   kProgress,
   kSimd,
   kCheck,
+  kTruth,
+  kPresets,
+  kGrid,
+  kSweepJson,
+  kPlot,
+  kReferenceSpp,
+  kRepeat,
 };
 
 enum class OptionGroup { kInput, kGi, kOutput, kGeneral };

@@ -1,5 +1,8 @@
 #include "run_options.h"
 
+#include <OpenImageIO/strutil.h>
+
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -70,6 +73,7 @@ void parse_temporal(const char* text, ssgi::GiSettings* gi) {
 CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool need_output) {
   CommonOptions o;
   o.run = subcommand_defaults(sub);
+  o.reference_spp = subcommand_defaults(kReferenceCommand).gi.rays;
   ssgi::GiSettings& gi = o.run.gi;
   ssgi::InputOptions& in = o.run.input;
   for (int i = 0; i < argc; ++i) o.command_line += (i ? " " : "ssgi ") + std::string(argv[i]);
@@ -283,6 +287,40 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
       case kLayerPrefix:
         o.run.write.layer_prefix = ssgi::parse_layer_prefix(a);
         break;
+      case kPresets: {
+        o.presets.clear();
+        std::stringstream list(value);
+        for (std::string name; std::getline(list, name, ',');) {
+          const auto& known = ssgi::preset_names();
+          if (std::find(known.begin(), known.end(), name) == known.end())
+            ssgi::throw_usage("--presets: unknown preset '" + name + "' (" +
+                              OIIO::Strutil::join(known, ", ") + ")");
+          if (std::find(o.presets.begin(), o.presets.end(), name) == o.presets.end())
+            o.presets.push_back(name);
+        }
+        break;
+      }
+      case kGrid:
+        o.grid = true;
+        break;
+      case kTruth:
+        if (*a == '\0') ssgi::throw_usage("--truth needs a layer name");
+        o.truth = a;
+        break;
+      case kSweepJson:
+        if (*a == '\0') ssgi::throw_usage("--json needs a file name");
+        o.json_file = a;
+        break;
+      case kPlot:
+        if (*a == '\0') ssgi::throw_usage("--plot needs a file name");
+        o.plot = a;
+        break;
+      case kReferenceSpp:
+        o.reference_spp = static_cast<int>(parse_long("reference-spp", a, 1, 4096));
+        break;
+      case kRepeat:
+        o.repeat = static_cast<int>(parse_long("repeat", a, 1, 100));
+        break;
       case 'v':
         o.verbose = true;
         break;
@@ -314,7 +352,11 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
   if (argc - optind > 1)
     ssgi::throw_usage(std::string("unexpected argument '") + argv[optind + 1] + "'");
   in.pattern = argv[optind];
-  if (need_output && o.run.output.empty()) ssgi::throw_usage("no output given (-o PATTERN)");
+  if (need_output && o.run.output.empty())
+    ssgi::throw_usage(sub == kSweepCommand ? "no output given (-o FILE.csv)"
+                                           : "no output given (-o PATTERN)");
+  if (sub == kSweepCommand && o.presets.empty() && !o.grid)
+    ssgi::throw_usage("nothing to run: --presets is empty and --grid is not given");
   if (!gi.env_map.empty() && env_color_given)
     ssgi::throw_usage("--env and --env-color both give the environment: use one");
   return o;

@@ -1,5 +1,5 @@
-// The options of `ssgi run`, `ssgi info` and `ssgi reference` (the plan depends on them),
-// parsed with getopt_long from option_table.h.
+// The options of `ssgi run`, `ssgi info`, `ssgi reference` and `ssgi sweep`, parsed with
+// getopt_long from option_table.h.
 #pragma once
 
 #include <functional>
@@ -24,6 +24,14 @@ struct CommonOptions {
   std::string preset = "default";  // --preset
   std::string progress = "auto";   // --progress auto|lines|openjd|deadline
   std::string simd;                // --simd TARGET; empty: SSGI_SIMD, else auto
+  // ssgi sweep (its table goes to run.output, -o)
+  std::vector<std::string> presets = ssgi::preset_names();  // --presets
+  bool grid = false;                                        // --grid
+  std::string truth;                                        // --truth LAYER
+  std::string json_file;                                    // --json FILE
+  std::string plot;                                         // --plot FILE.png
+  int reference_spp = 256;                                  // --reference-spp
+  int repeat = 1;                                           // --repeat
 };
 
 // Parses argv (argv[0] is the subcommand) over subcommand_defaults(sub), with the options

@@ -7,8 +7,9 @@
 
 namespace ssgi {
 
-// Removes every temporary file being written right now. Async-signal-safe (it only calls
-// unlink), for SIGINT and SIGTERM handlers; the files' writers must not go on afterwards.
+// Removes every temporary file being written right now, then every registered temporary
+// directory with the files in it. Async-signal-safe (open, getdents64, unlink, unlinkat,
+// rmdir, close), for SIGINT and SIGTERM handlers; the writers must not go on afterwards.
 void remove_temporary_files() noexcept;
 
 // Registers `path` as a temporary file being written, for remove_temporary_files(), for as long
@@ -22,6 +23,25 @@ class TemporaryFile {
   TemporaryFile& operator=(const TemporaryFile&) = delete;
 
  private:
+  int slot_;
+};
+
+// A private directory (mode 0700) for a program's scratch files, made under the system's
+// temporary directory ($TMPDIR, else /tmp) and removed with the files in it when the object
+// goes, on an exception too, or by remove_temporary_files() on a signal. It must hold only
+// files, no subdirectories. At most 4 at once; beyond, one is made unregistered.
+class TemporaryDirectory {
+ public:
+  // Makes `<tmp>/<prefix>XXXXXX`. Throws Error(kIO) when it cannot be made.
+  explicit TemporaryDirectory(const std::string& prefix);
+  ~TemporaryDirectory();
+  TemporaryDirectory(const TemporaryDirectory&) = delete;
+  TemporaryDirectory& operator=(const TemporaryDirectory&) = delete;
+
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
   int slot_;
 };
 
