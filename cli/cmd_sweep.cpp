@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "atomic_file.h"
 #include "commands.h"
 #include "run_options.h"
 #include "ssgi/compare.h"
@@ -202,31 +203,6 @@ std::string csv_cell(const std::string& text) {
   std::string out = "\"";
   for (char c : text) out += c == '"' ? std::string("\"\"") : std::string(1, c);
   return out + "\"";
-}
-
-// Writes `text` to `path` under a hidden temporary name, renamed into place when whole.
-void write_text_atomically(const std::string& path, const std::string& text,
-                           const std::string& what) {
-  const fs::path target(path);
-  std::error_code ec;
-  if (target.has_parent_path()) fs::create_directories(target.parent_path(), ec);
-  const std::string tmp =
-      (target.parent_path() / ("." + target.filename().string() + ".tmp")).string();
-  const ssgi::TemporaryFile registered(tmp);  // removed by a signal handler
-  {
-    std::ofstream file(tmp, std::ios::binary);
-    file << text;
-    file.flush();
-    if (!file.good()) {
-      fs::remove(tmp, ec);
-      ssgi::throw_io(path, "cannot write the " + what);
-    }
-  }
-  fs::rename(tmp, path, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    ssgi::throw_io(path, "cannot write the " + what + ": " + ec.message());
-  }
 }
 
 std::string csv_table(const std::vector<SweepRow>& rows) {

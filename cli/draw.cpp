@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <system_error>
 
+#include "atomic_file.h"
 #include "ssgi/error.h"
 #include "ssgi/temporary_files.h"
 
@@ -130,21 +131,11 @@ TextExtent Canvas::measure(const std::string& text, int size) const {
 }
 
 void Canvas::write_png(const std::string& path) const {
-  const fs::path target(path);
-  std::error_code ec;
-  if (target.has_parent_path()) fs::create_directories(target.parent_path(), ec);
-  const std::string tmp =
-      (target.parent_path() / ("." + target.filename().string() + ".tmp")).string();
-  const ssgi::TemporaryFile registered(tmp);  // removed by a signal handler
-  if (!image_.write(tmp, OIIO::TypeDesc::UINT8, "png")) {
-    fs::remove(tmp, ec);
-    ssgi::throw_io(path, "cannot write the image: " + image_.geterror());
-  }
-  fs::rename(tmp, path, ec);
-  if (ec) {
-    fs::remove(tmp, ec);
-    ssgi::throw_io(path, "cannot write the image");
-  }
+  write_atomically(path, "image", [this](const std::string& tmp, std::string* why) {
+    if (image_.write(tmp, OIIO::TypeDesc::UINT8, "png")) return true;
+    *why = image_.geterror();
+    return false;
+  });
 }
 
 }  // namespace ssgi_cli

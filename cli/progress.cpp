@@ -14,6 +14,7 @@
 #include <thread>
 #include <vector>
 
+#include "atomic_file.h"
 #include "commands.h"
 #include "ssgi/error.h"
 #include "ssgi/log.h"
@@ -259,23 +260,7 @@ void write_stats(const std::string& path, const CommonOptions& o, const ssgi::Ru
       {"summary", summary},
       {"median", {{"read_ms", median(read)}, {"gi_ms", median(gi)}, {"write_ms", median(write)}}},
       {"frames", frames}};
-  const std::string tmp = path + ".tmp";
-  const ssgi::TemporaryFile registered(tmp);  // removed by a signal handler
-  {
-    std::ofstream file(tmp);
-    file << out.dump(2) << "\n";
-    if (!file.good()) {
-      std::error_code ec;
-      std::filesystem::remove(tmp, ec);
-      throw ssgi::Error(ssgi::ErrorKind::kIO, path, "cannot write the statistics");
-    }
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw ssgi::Error(ssgi::ErrorKind::kIO, path, "cannot write the statistics");
-  }
+  write_text_atomically(path, out.dump(2) + "\n", "statistics");
 }
 
 // The run's last line: how many frames were written, reused and failed, and which.

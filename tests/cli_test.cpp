@@ -228,6 +228,18 @@ class Cli : public ::testing::Test {
     EXPECT_EQ(r.err, "ssgi: error: " + what + "\nTry 'ssgi " + subcommand + " --help'.\n");
   }
 
+  // in.0001.exr .. in.000<count>.exr in the test directory: the sample's frames, but for frame
+  // `broken`, which is not an image.
+  void write_frames_with_a_broken_one(int count, int broken) const {
+    for (int f = 1; f <= count; ++f) {
+      const std::string name = "in.000" + std::to_string(f) + ".exr";
+      if (f == broken)
+        std::ofstream(path(name)) << "not an image";
+      else
+        fs::copy_file(testdata("sample/sample.000" + std::to_string(f) + ".exr"), path(name));
+    }
+  }
+
   fs::path dir_;
 };
 
@@ -743,13 +755,7 @@ TEST_F(Cli, ResolutionChangeFailsThatFrameOnly) {
 TEST_F(Cli, FailFastStopsAtTheFirstFrameThatFails) {
   // Frame 2 of 3 is not an EXR. By default frames 1 and 3 are written (exit 1); with
   // --fail-fast the run stops there, with that frame's status (4), and frame 3 is not tried.
-  for (int f = 1; f <= 3; ++f) {
-    const std::string name = "in.000" + std::to_string(f) + ".exr";
-    if (f == 2)
-      std::ofstream(path(name)) << "not an image";
-    else
-      fs::copy_file(testdata("sample/sample.000" + std::to_string(f) + ".exr"), path(name));
-  }
+  write_frames_with_a_broken_one(3, 2);
   const std::vector<std::string> args = {
       "run", path("in.####.exr"), "--rays", "2", "--temporal", "none", "-q", "-o"};
   std::vector<std::string> all = args;
@@ -1520,13 +1526,7 @@ TEST_F(Cli, NoClobberRefusesBeforeComputingAnything) {
 
 TEST_F(Cli, ProgressForOpenJobDescriptionAndDeadlineGoesToStdout) {
   // Frame 2 of 3 is broken: the lines say so, and openjd hears why the run failed.
-  for (int f = 1; f <= 3; ++f) {
-    const std::string name = "in.000" + std::to_string(f) + ".exr";
-    if (f == 2)
-      std::ofstream(path(name)) << "not an image";
-    else
-      fs::copy_file(testdata("sample/sample.000" + std::to_string(f) + ".exr"), path(name));
-  }
+  write_frames_with_a_broken_one(3, 2);
   const std::vector<std::string> args = {
       "run", path("in.####.exr"), "--preset", "draft", "--temporal", "none", "-q", "--progress"};
   std::vector<std::string> openjd = args;
@@ -1606,13 +1606,7 @@ TEST_F(Cli, OnATerminalAProgressBarShowsFramesRateAndEta) {
 TEST_F(Cli, AnUnreadableNeighbourIsWarnedAboutOnce) {
   // Frame 3 of 5 is not an EXR: it fails alone, and the four windows it falls in (+-2) leave it
   // out with one warning between them, not one each.
-  for (int f = 1; f <= 5; ++f) {
-    const std::string name = "in.000" + std::to_string(f) + ".exr";
-    if (f == 3)
-      std::ofstream(path(name)) << "not an image";
-    else
-      fs::copy_file(testdata("sample/sample.000" + std::to_string(f) + ".exr"), path(name));
-  }
+  write_frames_with_a_broken_one(5, 3);
   const CliResult r = run_ssgi({"run", path("in.####.exr"), "-o", path("o.####.exr"), "--preset",
                                 "draft", "--progress", "lines"});
   EXPECT_EQ(r.exit_code, 1) << r.err;
