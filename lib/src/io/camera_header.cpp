@@ -3,8 +3,13 @@
 #include "camera_header.h"
 
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
+#include <map>
+#include <memory>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
@@ -326,17 +331,51 @@ std::optional<Camera> camera_from_header(const OIIO::ImageSpec& spec, const Box2
   return std::nullopt;
 }
 
-Camera camera_from_sidecar(const std::string& json_path, int frame, const Box2i& display_window) {
+namespace {
+
+// The sidecar's document, read and parsed once per file (and again only if the file changes):
+// every frame of a shot asks for its camera, and parsing the whole file each time made a shot
+// of N frames cost N^2. Errors are not kept: each call reports them again.
+std::shared_ptr<const json> sidecar_document(const std::string& json_path) {
+  struct Entry {
+    std::filesystem::file_time_type time;
+    std::uintmax_t size;
+    std::shared_ptr<const json> document;
+  };
+  static std::mutex mutex;
+  static std::map<std::string, Entry> cache;
+  std::error_code ec;
+  const auto time = std::filesystem::last_write_time(json_path, ec);
+  const std::uintmax_t size = ec ? 0 : std::filesystem::file_size(json_path, ec);
+  const bool known = !ec;
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    const auto it = cache.find(json_path);
+    if (known && it != cache.end() && it->second.time == time && it->second.size == size)
+      return it->second.document;
+  }
   std::ifstream in(json_path, std::ios::binary);
   if (!in) throw_io(json_path, "cannot open camera file");
-  json root;
+  auto root = std::make_shared<json>();
   try {
-    root = json::parse(in);
+    *root = json::parse(in);
   } catch (const json::parse_error& e) {
     if (in.bad()) throw_io(json_path, "cannot read camera file");
     throw_input(json_path, std::string("not valid JSON: ") + e.what());
   }
-  if (!root.is_object()) throw_input(json_path, "not a JSON object");
+  if (!root->is_object()) throw_input(json_path, "not a JSON object");
+  if (known) {
+    const std::lock_guard<std::mutex> lock(mutex);
+    cache[json_path] = {time, size, root};
+  }
+  return root;
+}
+
+}  // namespace
+
+Camera camera_from_sidecar(const std::string& json_path, int frame, const Box2i& display_window) {
+  const std::shared_ptr<const json> document = sidecar_document(json_path);
+  const json& root = *document;
   try {
     if (root.contains("frames")) {
       const json& frames = root["frames"];
