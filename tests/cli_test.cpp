@@ -918,7 +918,8 @@ void write_native_parts(const std::string& path, const std::vector<NativePart>& 
   std::vector<OIIO::ImageSpec> specs;
   for (const NativePart& p : parts) specs.push_back(p.spec);
   auto out = OIIO::ImageOutput::create(path);
-  ASSERT_TRUE(out && out->open(path, static_cast<int>(specs.size()), specs.data())) << path;
+  ASSERT_TRUE(out && out->open(path, static_cast<int>(specs.size()), specs.data()))
+      << path << ": " << (out ? out->geterror() : OIIO::geterror());
   for (std::size_t i = 0; i < parts.size(); ++i) {
     if (i > 0) {
       ASSERT_TRUE(out->open(path, specs[i], OIIO::ImageOutput::AppendSubimage));
@@ -2108,6 +2109,72 @@ TEST_F(Cli, SweepRefusesBadOptionsAndUnknownTruthLayers) {
   EXPECT_EQ(help.out.rfind("usage: ssgi sweep INPUT -o TABLE.csv", 0), 0u);
   EXPECT_NE(help.out.find("--reference-spp N"), std::string::npos);
   EXPECT_EQ(help.out.find("--preset P"), std::string::npos);
+}
+
+TEST_F(Cli, PassesSpreadOverPartsWithTheirOwnDataWindowsRun) {
+  // As Nuke writes them: geometry in a part over the whole frame, the light passes in a part
+  // with its own, smaller data window. The run reads the light part's pixels where they are
+  // (0 outside, as OpenEXR reads outside a data window), and passes both parts through as they
+  // were. Against the same passes in one part, cropped the same way (zeros outside): the same
+  // bits.
+  const OIIO::ImageBuf source(testdata("sample/sample.0001.exr"));
+  const std::vector<std::string> geo = {"ViewLayer.Depth.Z", "ViewLayer.Normal.X",
+                                        "ViewLayer.Normal.Y", "ViewLayer.Normal.Z"};
+  const std::vector<std::string> light = {"ViewLayer.DiffCol.R", "ViewLayer.DiffCol.G",
+                                          "ViewLayer.DiffCol.B", "ViewLayer.DiffDir.R",
+                                          "ViewLayer.DiffDir.G", "ViewLayer.DiffDir.B"};
+  auto channels = [&](const std::vector<std::string>& names) {
+    std::vector<int> order;
+    for (const std::string& n : names) order.push_back(source.spec().channelindex(n));
+    return OIIO::ImageBufAlgo::channels(source, static_cast<int>(order.size()), order, {}, names);
+  };
+  OIIO::ImageBuf geo_part = channels(geo);
+  const OIIO::ROI crop(10, 81, 8, 51, 0, 1, 0, static_cast<int>(light.size()));
+  OIIO::ImageBuf light_part = OIIO::ImageBufAlgo::cut(channels(light), crop);
+  light_part.set_origin(10, 8);  // cut moves the window to 0,0
+  std::vector<NativePart> parts;
+  for (const OIIO::ImageBuf* part : {&geo_part, &light_part}) {
+    NativePart p;
+    p.spec = part->spec();
+    p.spec.set_format(OIIO::TypeDesc::FLOAT);
+    p.spec.channelformats.clear();
+    for (const OIIO::ParamValue& a : source.spec().extra_attribs)
+      if (a.name().string().rfind("world", 0) == 0 || a.name() == "BlenderMultiChannel")
+        p.spec.attribute(a.name(), a.type(), a.data());
+    p.spec.attribute("oiio:subimagename", part == &geo_part ? "geo" : "light");
+    p.spec.full_x = p.spec.full_y = p.spec.full_z = 0;  // one display window for all parts
+    p.spec.full_width = 96, p.spec.full_height = 64, p.spec.full_depth = 1;
+    p.spec.tile_width = p.spec.tile_height = p.spec.tile_depth = 0;  // scanline parts
+    p.bytes.resize(p.spec.image_bytes());
+    ASSERT_TRUE(part->get_pixels(part->roi(), OIIO::TypeDesc::FLOAT, p.bytes.data()));
+    parts.push_back(std::move(p));
+  }
+  write_native_parts(path("parts.0001.exr"), parts);
+  // The same passes in one part over the whole frame, zero outside the crop.
+  ExrImage one = read_exr(testdata("sample/sample.0001.exr"));
+  one.spec.channelnames = geo;  // the same passes, nothing else
+  one.spec.channelnames.insert(one.spec.channelnames.end(), light.begin(), light.end());
+  for (const std::string& n : light)
+    for (int y = 0; y < 64; ++y)
+      for (int x = 0; x < 96; ++x)
+        if (!(x >= 10 && x < 81 && y >= 8 && y < 51)) one.planes.at(n)[y * 96 + x] = 0.0f;
+  write_exr(path("one.0001.exr"), one);
+  for (const char* name : {"parts", "one"}) {
+    const CliResult r = run_ssgi({"run", path(std::string(name) + ".0001.exr"), "-o",
+                                  path(std::string("o_") + name + ".0001.exr"), "-q"});
+    ASSERT_EQ(r.exit_code, 0) << name << ": " << r.err;
+  }
+  const ExrImage a = read_exr(path("o_parts.0001.exr"));
+  const ExrImage b = read_exr(path("o_one.0001.exr"));
+  for (const std::string& c : kOurChannels) EXPECT_EQ(a.planes.at(c), b.planes.at(c)) << c;
+  const std::vector<float>& ind = a.planes.at("indirect.G");
+  EXPECT_GT(*std::max_element(ind.begin(), ind.end()), 0.0f);
+  // The light part comes through with its own window.
+  auto in = OIIO::ImageInput::open(path("o_parts.0001.exr"));
+  ASSERT_TRUE(in && in->seek_subimage(1, 0));
+  EXPECT_EQ(in->spec().x, 10);
+  EXPECT_EQ(in->spec().width, 71);
+  EXPECT_EQ(in->spec().nchannels, 6);
 }
 
 }  // namespace

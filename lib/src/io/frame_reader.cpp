@@ -90,17 +90,31 @@ std::vector<std::vector<float>> read_channels(OIIO::ImageInput& in, int subimage
   if (!in.seek_subimage(subimage, 0))
     throw_input(path, "has no subimage " + std::to_string(subimage));
   const OIIO::ImageSpec& spec = in.spec();
-  // Every part the G-buffer is read from must cover the same pixels as the first part.
-  if (data_window_of(spec) != data_window)
-    throw_input(path, "part " + std::to_string(subimage) +
-                          " has a data window other than the first part's");
+  const Box2i part = data_window_of(spec);
   std::vector<int> index(wanted.size());
   for (std::size_t i = 0; i < wanted.size(); ++i) {
     const auto it = std::find(spec.channelnames.begin(), spec.channelnames.end(), wanted[i]);
     if (it == spec.channelnames.end()) throw_input(path, "has no channel '" + wanted[i] + "'");
     index[i] = static_cast<int>(it - spec.channelnames.begin());
   }
-  return detail::read_float_planes(in, subimage, index, path);
+  std::vector<std::vector<float>> planes = detail::read_float_planes(in, subimage, index, path);
+  if (part == data_window) return planes;
+  // A part with a data window of its own (Nuke writes each part's bounding box): its pixels
+  // where they fall in the frame's window (the first part's), 0 elsewhere, as OpenEXR reads
+  // pixels outside a data window.
+  const int w = data_window.width(), h = data_window.height();
+  const int x0 = std::max(part.x0, data_window.x0), x1 = std::min(part.x1, data_window.x1);
+  const int y0 = std::max(part.y0, data_window.y0), y1 = std::min(part.y1, data_window.y1);
+  std::vector<std::vector<float>> placed(planes.size(),
+                                         std::vector<float>(static_cast<std::size_t>(w) * h));
+  for (std::size_t i = 0; i < planes.size() && x1 > x0; ++i)
+    for (int y = y0; y < y1; ++y)
+      std::copy_n(planes[i].begin() + static_cast<std::ptrdiff_t>(y - part.y0) * part.width() +
+                      (x0 - part.x0),
+                  x1 - x0,
+                  placed[i].begin() + static_cast<std::ptrdiff_t>(y - data_window.y0) * w +
+                      (x0 - data_window.x0));
+  return placed;
 }
 
 // Values beyond this are clamped: sums of a few thousand of them stay finite in float.
