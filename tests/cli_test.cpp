@@ -2177,4 +2177,26 @@ TEST_F(Cli, PassesSpreadOverPartsWithTheirOwnDataWindowsRun) {
   EXPECT_EQ(in->spec().nchannels, 6);
 }
 
+TEST_F(Cli, ACameraJumpingBetweenFramesStaysFinite) {
+  // A sidecar camera that jumps 1e4 units sideways at frame 2 and back at frame 3, with the
+  // temporal window reprojecting across the jump: finite, lit layers in every frame.
+  std::ofstream(path("cameras.json")) << R"({"frames": [
+    {"frame": 1, "hfov_deg": 65, "worldToCamera": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]},
+    {"frame": 2, "hfov_deg": 65, "worldToCamera": [1,0,0,0, 0,1,0,0, 0,0,1,0, 1e4,0,0,1]},
+    {"frame": 3, "hfov_deg": 65, "worldToCamera": [1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]}]})";
+  const CliResult r = run_ssgi({"run", testdata("sample/sample.1-3#.exr"), "-o", path("o.####.exr"),
+                                "-q", "--camera", path("cameras.json")});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (int f = 1; f <= 3; ++f) {
+    const ExrImage out = read_exr(path("o.000" + std::to_string(f) + ".exr"));
+    float brightest = 0;
+    for (const std::string& c : kOurChannels)
+      for (float v : out.planes.at(c)) {
+        ASSERT_TRUE(std::isfinite(v)) << f << " " << c;
+        if (c == "indirect.G") brightest = std::max(brightest, v);
+      }
+    EXPECT_GT(brightest, 0.0f) << f;
+  }
+}
+
 }  // namespace
