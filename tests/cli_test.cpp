@@ -1,5 +1,10 @@
 // End-to-end tests of the `ssgi` command line: the built binary on the committed fixtures, its
 // exit codes, its one-line errors, and the files it writes (or does not write).
+#include <Imath/half.h>
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfFrameBuffer.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfOutputFile.h>
 #include <OpenImageIO/imagebufalgo.h>
 #include <OpenImageIO/imageio.h>
 #include <fcntl.h>
@@ -2197,6 +2202,38 @@ TEST_F(Cli, ACameraJumpingBetweenFramesStaysFinite) {
       }
     EXPECT_GT(brightest, 0.0f) << f;
   }
+}
+
+TEST_F(Cli, SubsampledChannelsAreRefusedWithTheReason) {
+  // A luminance/chroma file (Y full, RY and BY sampled 2x2), written with OpenEXR itself since
+  // OIIO does not write subsampled channels: exit 4, one line naming the file and why.
+  const int w = 96, h = 64;
+  Imf::Header header(w, h);
+  header.channels().insert("Y", Imf::Channel(Imf::HALF));
+  header.channels().insert("RY", Imf::Channel(Imf::HALF, 2, 2));
+  header.channels().insert("BY", Imf::Channel(Imf::HALF, 2, 2));
+  header.channels().insert("Z", Imf::Channel(Imf::FLOAT));
+  std::vector<half> y(w * h, half(0.5f)), chroma((w / 2) * (h / 2), half(0.1f));
+  std::vector<float> z(w * h, 3.0f);
+  {
+    Imf::OutputFile file(path("yc.0001.exr").c_str(), header);
+    Imf::FrameBuffer buffer;
+    auto slice = [](Imf::PixelType type, void* base, std::size_t size, int width, int sampling) {
+      return Imf::Slice(type, static_cast<char*>(base), size, size * width, sampling, sampling);
+    };
+    buffer.insert("Y", slice(Imf::HALF, y.data(), sizeof(half), w, 1));
+    buffer.insert("RY", slice(Imf::HALF, chroma.data(), sizeof(half), w / 2, 2));
+    buffer.insert("BY", slice(Imf::HALF, chroma.data(), sizeof(half), w / 2, 2));
+    buffer.insert("Z", slice(Imf::FLOAT, z.data(), sizeof(float), w, 1));
+    file.setFrameBuffer(buffer);
+    file.writePixels(h);
+  }
+  const CliResult r =
+      run_ssgi({"run", path("yc.0001.exr"), "-o", path("o.0001.exr"), "--fov", "40", "--channel",
+                "normal=Y,Y,Y", "--channel", "albedo=Y,Y,Y", "--channel", "direct=Y,Y,Y"});
+  EXPECT_EQ(r.exit_code, 4) << r.err;
+  expect_one_error(r, path("yc.0001.exr"), "Subsampled channels are not supported");
+  EXPECT_EQ(entries(), std::set<std::string>{"yc.0001.exr"});
 }
 
 }  // namespace
