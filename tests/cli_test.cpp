@@ -2236,4 +2236,31 @@ TEST_F(Cli, SubsampledChannelsAreRefusedWithTheReason) {
   EXPECT_EQ(entries(), std::set<std::string>{"yc.0001.exr"});
 }
 
+TEST_F(Cli, AnEightBitEnvironmentMapIsDecodedFromSrgb) {
+  // The lone plane sees only the environment. A PNG of sRGB 128 everywhere is light 0.2158605
+  // (the sRGB decoding of 128/255), not 0.502: it must light the plane as an EXR holding that
+  // linear value does.
+  const float linear = std::pow((128.0f / 255.0f + 0.055f) / 1.055f, 2.4f);
+  OIIO::ImageBuf png(OIIO::ImageSpec(64, 32, 3, OIIO::TypeDesc::UINT8));
+  OIIO::ImageBufAlgo::fill(png, {128 / 255.0f, 128 / 255.0f, 128 / 255.0f});
+  ASSERT_TRUE(png.write(path("env.png"))) << png.geterror();
+  OIIO::ImageBuf exr(OIIO::ImageSpec(64, 32, 3, OIIO::TypeDesc::FLOAT));
+  OIIO::ImageBufAlgo::fill(exr, {linear, linear, linear});
+  ASSERT_TRUE(exr.write(path("env.exr"))) << exr.geterror();
+  std::map<std::string, float> mean;
+  for (const char* env : {"env.png", "env.exr"}) {
+    const std::string out = path(std::string("o_") + env + ".0001.exr");
+    const CliResult r = run_ssgi({"run", testdata("plane/plane.0001.exr"), "-o", out, "-q", "--env",
+                                  path(env), "--miss", "env"});
+    ASSERT_EQ(r.exit_code, 0) << env << ": " << r.err;
+    const ExrImage image = read_exr(out);
+    const std::vector<float>& ind = image.planes.at("indirect.G");
+    double sum = 0;
+    for (float v : ind) sum += v;
+    mean[env] = static_cast<float>(sum / static_cast<double>(ind.size()));
+  }
+  EXPECT_GT(mean["env.exr"], 0.05f);
+  EXPECT_NEAR(mean["env.png"], mean["env.exr"], 1e-4f * mean["env.exr"]);
+}
+
 }  // namespace

@@ -2,12 +2,14 @@
 
 #include <OpenEXR/ImfEnvmap.h>
 #include <OpenImageIO/imageio.h>
+#include <OpenImageIO/strutil.h>
 
 #include <algorithm>
 #include <cmath>
 
 #include "oiio_files.h"
 #include "ssgi/error.h"
+#include "ssgi/log.h"
 
 namespace ssgi::detail {
 
@@ -26,6 +28,17 @@ Environment Environment::from_file(const std::string& path, char up) {
   std::vector<float> pixels(static_cast<std::size_t>(spec.width) * spec.height * spec.nchannels);
   if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, pixels.data()))
     throw_io(path, "cannot read environment map pixels: " + in->geterror());
+  // An 8- or 16-bit map (PNG, JPEG, TIFF), or one that says it is sRGB, holds sRGB-encoded
+  // values: light is their decoding (IEC 61966-2-1, as OIIO's built-in sRGB transform), not the
+  // values themselves. Float maps (EXR, HDR) are linear.
+  const bool integer = spec.format.basetype != OIIO::TypeDesc::FLOAT &&
+                       spec.format.basetype != OIIO::TypeDesc::HALF &&
+                       spec.format.basetype != OIIO::TypeDesc::DOUBLE;
+  const bool srgb =
+      integer || OIIO::Strutil::iequals(spec.get_string_attribute("oiio:ColorSpace"), "sRGB");
+  if (srgb)
+    log_info(path + ": environment map is sRGB-encoded (" + spec.format.c_str() +
+             "), decoded to linear light");
   Environment env;
   env.up_ = up;
   env.map_ = Image(spec.width, spec.height, 3);
@@ -33,7 +46,8 @@ Environment Environment::from_file(const std::string& path, char up) {
   for (int c = 0; c < 3; ++c) {
     float* dst = env.map_.plane(c);
     for (std::size_t p = 0; p < env.map_.plane_size(); ++p) {
-      const float v = pixels[p * spec.nchannels + idx[c]];
+      float v = pixels[p * spec.nchannels + idx[c]];
+      if (srgb) v = v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
       // Non-finite or negative texels would poison every pixel that sees them.
       dst[p] = std::isfinite(v) ? std::clamp(v, 0.0f, 1e30f) : 0.0f;
     }
