@@ -1674,6 +1674,22 @@ TEST_F(Cli, InfoCheckDecodesEveryFrameAsRunWould) {
             path("nothing.####.exr") + ": no files match this pattern");
 }
 
+// Whether every value of ssgi's layers in `out` is finite, and the brightest value of its
+// channels named `prefix`* (indirect.G, indirect.): how much light the frame found.
+struct LayerCheck {
+  bool finite = true;
+  float brightest = 0;
+};
+LayerCheck check_our_layers(const ExrImage& out, const std::string& prefix) {
+  LayerCheck check;
+  for (const std::string& c : kOurChannels)
+    for (float v : out.planes.at(c)) {
+      check.finite = check.finite && std::isfinite(v);
+      if (c.rfind(prefix, 0) == 0) check.brightest = std::max(check.brightest, v);
+    }
+  return check;
+}
+
 TEST_F(Cli, ExtremeSizesRunAndStayFinite) {
   // The sample frame box-filtered to sizes that stress the trace grid and the pyramid: one
   // pixel, one row or column (no triangle: nothing to hit, so no light), odd sizes, an image
@@ -1695,13 +1711,9 @@ TEST_F(Cli, ExtremeSizesRunAndStayFinite) {
     ASSERT_EQ(r.exit_code, 0) << name << ": " << r.err;
     const ExrImage out = read_exr(path("o" + name + ".0001.exr"));
     EXPECT_EQ(out.spec.width, size.w);
-    float brightest = 0;
-    for (const std::string& c : kOurChannels)
-      for (float v : out.planes.at(c)) {
-        ASSERT_TRUE(std::isfinite(v)) << name << " " << c;
-        if (c.rfind("indirect.", 0) == 0) brightest = std::max(brightest, v);
-      }
-    EXPECT_EQ(brightest > 0, size.lit) << name;
+    const LayerCheck check = check_our_layers(out, "indirect.");
+    EXPECT_TRUE(check.finite) << name;
+    EXPECT_EQ(check.brightest > 0, size.lit) << name;
   }
 }
 
@@ -1743,13 +1755,9 @@ TEST_F(Cli, ExtremeValuesRunFiniteAndPassThroughUntouched) {
     const CliResult r = run_ssgi({"run", path(name), "-o", path("o_" + c.name + ".0001.exr")});
     ASSERT_EQ(r.exit_code, 0) << c.name << ": " << r.err;
     const ExrImage out = read_exr(path("o_" + c.name + ".0001.exr"));
-    float brightest = 0;
-    for (const std::string& ch : kOurChannels)
-      for (float v : out.planes.at(ch)) {
-        ASSERT_TRUE(std::isfinite(v)) << c.name << " " << ch;
-        if (ch == "indirect.G") brightest = std::max(brightest, v);
-      }
-    EXPECT_GT(brightest, 0.0f) << c.name;
+    const LayerCheck check = check_our_layers(out, "indirect.G");
+    EXPECT_TRUE(check.finite) << c.name;
+    EXPECT_GT(check.brightest, 0.0f) << c.name;
     for (const auto& [ch, plane] : written.planes) {
       const std::vector<float>& passed = out.planes.at(ch);
       ASSERT_EQ(passed.size(), plane.size());
@@ -1786,13 +1794,9 @@ TEST_F(Cli, ExtremeCamerasAndMotionRunFinite) {
       std::string out = extra.back();
       out.replace(out.find("####"), 4, "000" + std::to_string(f));
       const ExrImage image = read_exr(out);
-      float brightest = 0;
-      for (const std::string& ch : kOurChannels)
-        for (float v : image.planes.at(ch)) {
-          ASSERT_TRUE(std::isfinite(v)) << out << " " << ch;
-          if (ch == "indirect.G") brightest = std::max(brightest, v);
-        }
-      EXPECT_GT(brightest, 0.0f) << out;
+      const LayerCheck check = check_our_layers(image, "indirect.G");
+      EXPECT_TRUE(check.finite) << out;
+      EXPECT_GT(check.brightest, 0.0f) << out;
     }
   }
 }
@@ -2194,13 +2198,9 @@ TEST_F(Cli, ACameraJumpingBetweenFramesStaysFinite) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   for (int f = 1; f <= 3; ++f) {
     const ExrImage out = read_exr(path("o.000" + std::to_string(f) + ".exr"));
-    float brightest = 0;
-    for (const std::string& c : kOurChannels)
-      for (float v : out.planes.at(c)) {
-        ASSERT_TRUE(std::isfinite(v)) << f << " " << c;
-        if (c == "indirect.G") brightest = std::max(brightest, v);
-      }
-    EXPECT_GT(brightest, 0.0f) << f;
+    const LayerCheck check = check_our_layers(out, "indirect.G");
+    EXPECT_TRUE(check.finite) << f;
+    EXPECT_GT(check.brightest, 0.0f) << f;
   }
 }
 

@@ -4,8 +4,8 @@
 #pragma once
 
 #include <map>
-#include <set>
 #include <memory>
+#include <set>
 
 #include "ssgi/gbuffer.h"
 #include "ssgi/io.h"
@@ -53,7 +53,7 @@ class FrameSource {
   const SequenceInfo& seq_;
   const InputOptions& options_;
   const Pipeline& pipeline_;
-  std::map<int, Lit> ring_;  // window: frames on disk around the last output frame
+  std::map<int, Lit> ring_;   // window: frames on disk around the last output frame
   std::set<int> unreadable_;  // neighbours that failed to read: warned about once, left out
   // EMA: the last frame stepped (its index in frames_on_disk) and its filtered output.
   int ema_index_ = 0;

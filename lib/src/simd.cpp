@@ -50,9 +50,8 @@ void apply(const std::string& name) {
     g_scalar = true;
   } else {
     const auto& targets = available_targets();
-    const auto it = std::find_if(targets.begin(), targets.end(), [&](std::int64_t t) {
-      return target_name(t) == wanted;
-    });
+    const auto it = std::find_if(targets.begin(), targets.end(),
+                                 [&](std::int64_t t) { return target_name(t) == wanted; });
     if (it == targets.end()) {
       std::string known;
       for (const std::string& n : simd_targets()) known += (known.empty() ? "" : ", ") + n;

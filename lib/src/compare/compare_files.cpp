@@ -156,15 +156,9 @@ Image read_planes(OIIO::ImageInput& in, const std::vector<ChannelRef>& refs, con
   return image;
 }
 
-// Throws Error(kInput) when subimage `subimage` holds deep data.
-void refuse_deep(OIIO::ImageInput& in, int subimage, const std::string& path) {
-  in.seek_subimage(subimage, 0);
-  if (in.spec().deep) throw_input(path, "has deep data, which ssgi compare does not compare");
-}
-
 // Every channel of subimage `subimage` as idiff reads it. Throws Error(kInput) for deep data.
 WindowedImage read_subimage(OIIO::ImageInput& in, int subimage, const std::string& path) {
-  refuse_deep(in, subimage, path);
+  detail::refuse_deep(in, subimage, path);
   const OIIO::ImageSpec spec = in.spec();
   WindowedImage image;
   image.window = data_window_of(spec);
@@ -368,8 +362,8 @@ IdiffFileResult idiff_files(const std::string& a_path, const std::string& b_path
         b.channel_names.push_back(layer.b[i]);
       }
     }
-    for (const ChannelRef& ref : a_refs) refuse_deep(*a_in, ref.subimage, a_path);
-    for (const ChannelRef& ref : b_refs) refuse_deep(*b_in, ref.subimage, b_path);
+    for (const ChannelRef& ref : a_refs) detail::refuse_deep(*a_in, ref.subimage, a_path);
+    for (const ChannelRef& ref : b_refs) detail::refuse_deep(*b_in, ref.subimage, b_path);
     a.window = common_data_window(*a_in, a_refs, a_path);
     b.window = common_data_window(*b_in, b_refs, b_path);
     a.pixels = read_planes(*a_in, a_refs, a.window, a_path);

@@ -32,17 +32,23 @@ std::unique_ptr<OIIO::ImageInput> open_image(const std::string& path) {
   return in;
 }
 
+void refuse_deep(OIIO::ImageInput& in, int subimage, const std::string& path) {
+  if (!in.seek_subimage(subimage, 0))
+    throw_io(path, "cannot read part " + std::to_string(subimage));
+  if (in.spec().deep)
+    throw_input(path, "part " + std::to_string(subimage) +
+                          " holds deep data, which ssgi does not read yet: flatten it first "
+                          "(oiiotool IN --flatten -o OUT)");
+}
+
 std::vector<std::vector<float>> read_float_planes(OIIO::ImageInput& in, int subimage,
                                                   const std::vector<int>& indices,
                                                   const std::string& path) {
   if (indices.empty()) return {};
   if (!in.seek_subimage(subimage, 0))
     throw_io(path, "cannot read part " + std::to_string(subimage));
+  refuse_deep(in, subimage, path);
   const OIIO::ImageSpec& spec = in.spec();
-  if (spec.deep)
-    throw_input(path, "part " + std::to_string(subimage) +
-                          " holds deep data, which ssgi does not read yet: flatten it first "
-                          "(oiiotool IN --flatten -o OUT)");
   const int lo = *std::min_element(indices.begin(), indices.end());
   const int hi = *std::max_element(indices.begin(), indices.end());
   assert(lo >= 0 && hi < spec.nchannels);

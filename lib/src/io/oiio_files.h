@@ -22,9 +22,14 @@ std::string one_line(std::string message);
 // directory or empty, or OIIO cannot read it.
 std::unique_ptr<OIIO::ImageInput> open_image(const std::string& path);
 
+// Throws Error(kInput) naming `path` when subimage `subimage` holds deep data (not read yet),
+// Error(kIO) when it cannot be found.
+void refuse_deep(OIIO::ImageInput& in, int subimage, const std::string& path);
+
 // Reads channels `indices` (of subimage `subimage`, any order) as one float plane each, with a
 // single read of the range that covers them: OIIO 2.4 decompresses every ZIP block again for
-// each read. Throws Error(kIO) naming `path` when the pixels cannot be read.
+// each read. Throws Error(kIO) naming `path` when the pixels cannot be read, Error(kInput) for
+// deep data.
 std::vector<std::vector<float>> read_float_planes(OIIO::ImageInput& in, int subimage,
                                                   const std::vector<int>& indices,
                                                   const std::string& path);
