@@ -391,5 +391,86 @@ TEST(Pipeline, GrooveGivesTheViewFactorOfItsLitFace) {
   }
 }
 
+// A lit panel in front of a backdrop, over a floor: the backdrop sees the panel's unlit back,
+// so the light of the panel's front never reaches it (surface_model.h), while the floor in front
+// of the panel gets it; from the second bounce the back brings the panel's albedo x its own
+// indirect light. Camera space is world space; misses bring the environment C.
+TEST(Pipeline, AHitFromBehindBringsTheBackNotTheLitFront) {
+  GiSettings base;
+  base.miss = MissMode::kEnvironment;
+  base.env_color = {0.5f, 0.5f, 0.5f};
+  base.denoise = DenoiseMode::kNone;
+  base.temporal = TemporalMode::kNone;
+  base.trace_scale = 1;
+  base.slices = 16;
+  base.rays = 64;
+  base.max_steps = 64;
+  Frame f = load("plane/plane.0001.exr", base);
+  GBuffer& g = f.g;
+  const int w = g.width(), h = g.height();
+  g.camera = camera_from_fov(60.0, g.display_window);
+  const Camera& cam = g.camera;
+  enum Surface { kFloor, kPanel, kBackdrop };
+  std::vector<Surface> what(static_cast<std::size_t>(w) * h);
+  const double floor_y = -1.5, panel_z = 6, panel_top = 0.3, panel_x = 2, backdrop_z = 10;
+  g.depth = Image(w, h, 1);
+  g.normal = Image(w, h, 3);
+  g.albedo = Image(w, h, 3, 0.5f);
+  g.direct = Image(w, h, 3);
+  if (!g.emission.empty()) g.emission = Image(w, h, 3);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const double rx = (x + 0.5 - cam.cx) / cam.fx, ry = (cam.cy - (y + 0.5)) / cam.fy;
+      double z = backdrop_z;
+      Surface s = kBackdrop;
+      if (std::fabs(rx * panel_z) < panel_x && ry * panel_z < panel_top && ry * panel_z > floor_y)
+        z = panel_z, s = kPanel;
+      if (ry < 0 && floor_y / ry < z) z = floor_y / ry, s = kFloor;
+      g.depth.at(0, x, y) = static_cast<float>(z);
+      g.normal.at(s == kFloor ? 1 : 2, x, y) = s == kFloor ? 1.0f : -1.0f;
+      what[static_cast<std::size_t>(y) * w + x] = s;
+    }
+  auto with_panel = [&](float direct, float albedo) {
+    GBuffer out = g;
+    for (std::size_t p = 0; p < what.size(); ++p)
+      if (what[p] == kPanel)
+        for (int c = 0; c < 3; ++c)
+          out.direct.plane(c)[p] = direct, out.albedo.plane(c)[p] = albedo;
+    return out;
+  };
+  const GBuffer dark = with_panel(0, 0.5f), lit = with_panel(1, 0.5f), black = with_panel(0, 0);
+  // The backdrop just above the panel's top edge, and the floor in front of it.
+  std::vector<std::size_t> backdrop, floor;
+  for (int y = 0; y < h; ++y)
+    for (int x = w / 3; x < 2 * w / 3; ++x) {
+      const std::size_t p = static_cast<std::size_t>(y) * w + x;
+      if (what[p] == kBackdrop && y + 3 < h && what[p + 3 * w] == kPanel) backdrop.push_back(p);
+      if (what[p] == kFloor && g.depth.plane(0)[p] < panel_z - 1) floor.push_back(p);
+    }
+  ASSERT_GE(backdrop.size(), 20u);
+  ASSERT_GE(floor.size(), 20u);
+
+  for (Tracer tracer : {Tracer::kSlices, Tracer::kScreenSpace, Tracer::kReference}) {
+    SCOPED_TRACE(tracer == Tracer::kReference ? "reference" : tracer_name(tracer));
+    GiSettings s = base;
+    s.tracer = tracer;
+    s.bounces = 1;
+    const Pipeline one(f.seq, s);
+    const Image a = one.indirect_light(dark), b = one.indirect_light(lit);
+    for (std::size_t p : backdrop) ASSERT_EQ(a.plane(0)[p], b.plane(0)[p]);
+    double gain = 0;
+    for (std::size_t p : floor) gain += (b.plane(0)[p] - a.plane(0)[p]) / floor.size();
+    EXPECT_GT(gain, 0.02);
+    s.bounces = 2;
+    const Pipeline two(f.seq, s);
+    const Image grey = two.indirect_light(dark), none = two.indirect_light(black);
+    double back = 0;
+    for (std::size_t p : backdrop) back += (grey.plane(0)[p] - none.plane(0)[p]) / backdrop.size();
+    std::printf("%s: floor gains %.4f from the lit front; the backdrop %.4f from the back\n",
+                tracer == Tracer::kReference ? "reference" : tracer_name(tracer), gain, back);
+    EXPECT_GT(back, 0.005);
+  }
+}
+
 }  // namespace
 }  // namespace ssgi

@@ -158,7 +158,8 @@ TEST(Reference, AgreesWithADenseWalkThroughTheModel) {
       detail::ray_sample(noise, k, &u1, &u2, &jitter);
       const int walk = dense_walk(g, mesh, o, detail::cosine_hemisphere(n, u1, u2), x, y);
       ++rays;
-      differ += hits.hit[static_cast<std::size_t>(p) * s.rays + k] != walk ? 1 : 0;
+      const int hit = hits.hit[static_cast<std::size_t>(p) * s.rays + k];
+      differ += (hit >= 0 ? detail::hit_pixel(hit) : hit) != walk ? 1 : 0;
     }
   }
   std::printf("%d of %d rays differ from the dense walk\n", differ, rays);

@@ -7,6 +7,7 @@
 
 #include "misses.h"
 #include "parallel.h"
+#include "surface_model.h"
 
 namespace ssgi::detail {
 
@@ -180,26 +181,33 @@ MissLight miss_light_over_grid(const TraceGrid& grid, const Radiance& radiance, 
 }  // namespace
 
 Image gather_bounces(const TraceGrid& grid, const WeightedHits& hits, int bounces, double closure) {
-  // Each bounce's light per trace sample, packed RGB_ so that a hit is one 16-byte load.
+  // Each bounce's light per trace sample, packed RGB_ so that a hit is one 16-byte load: at 2 s
+  // the light of its front (what it reflects plus albedo x its indirect light), at 2 s + 1 that
+  // of its unseen back (albedo x indirect only), which hits from behind bring (surface_model.h).
   const std::size_t n = grid.origin.size();
-  std::vector<std::array<float, 4>> light(n);
+  std::vector<std::array<float, 4>> light(2 * n);
   for (std::size_t s = 0; s < n; ++s)
-    light[s] = {grid.reflected.plane(0)[s], grid.reflected.plane(1)[s], grid.reflected.plane(2)[s],
-                0.0f};
-  auto lookup = [&](int s) {
-    const std::array<float, 4>& l = light[s];
+    light[2 * s] = {grid.reflected.plane(0)[s], grid.reflected.plane(1)[s],
+                    grid.reflected.plane(2)[s], 0.0f};
+  auto lookup = [&](std::int32_t hit) {
+    const std::array<float, 4>& l =
+        light[2 * static_cast<std::size_t>(hit_pixel(hit)) + (hit >= kSeenFromBehind ? 1 : 0)];
     return std::array<float, 3>{l[0], l[1], l[2]};
   };
-  Image indirect = gather_once(grid, hits, lookup, miss_light_over_grid(grid, lookup, closure));
+  auto front = [&](int s) { return lookup(s); };
+  Image indirect = gather_once(grid, hits, lookup, miss_light_over_grid(grid, front, closure));
   for (int b = 1; b < bounces; ++b) {
     parallel_for_rows(grid.height, [&](int by) {
       for (int bx = 0; bx < grid.width; ++bx) {
         const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
-        for (int c = 0; c < 3; ++c)
-          light[s][c] = grid.reflected.plane(c)[s] + grid.albedo.plane(c)[s] * indirect.plane(c)[s];
+        for (int c = 0; c < 3; ++c) {
+          const float back = grid.albedo.plane(c)[s] * indirect.plane(c)[s];
+          light[2 * s][c] = grid.reflected.plane(c)[s] + back;
+          light[2 * s + 1][c] = back;
+        }
       }
     });
-    indirect = gather_once(grid, hits, lookup, miss_light_over_grid(grid, lookup, closure));
+    indirect = gather_once(grid, hits, lookup, miss_light_over_grid(grid, front, closure));
   }
   return indirect;
 }

@@ -40,7 +40,7 @@ TraceGrid make_trace_grid(const GBuffer& g, const Image& reflected, int scale, f
 // Weighted hits of every trace sample.
 struct WeightedHits {
   std::vector<std::uint32_t> begin;  // per trace sample, first entry; one more at the end
-  std::vector<std::int32_t> pixel;   // trace sample whose light the entry brings
+  std::vector<std::int32_t> pixel;   // trace sample whose light it brings, kSeenFromBehind marked
   std::vector<float> weight;         // its share of the cosine-weighted hemisphere
   Image miss;                        // 1 channel: the share that met nothing
   Image env;                         // 3 channels: environment light of those directions
@@ -52,7 +52,8 @@ WeightedHits weighted_from_rays(const TraceGrid& grid, const RayHits& rays);
 
 // Indirect light at the trace grid after `bounces` gathers over `hits`: a hit brings its
 // sample's reflected light plus, from the second bounce on, its albedo x the indirect light it
-// gathered in the bounce before; the missed share brings the miss model's light (misses.h,
+// gathered in the bounce before (a hit from behind only the latter: surface_model.h); the missed
+// share brings the miss model's light (misses.h,
 // with `closure` from closure_weight). 0 where the grid has no origin.
 Image gather_bounces(const TraceGrid& grid, const WeightedHits& hits, int bounces, double closure);
 

@@ -48,10 +48,11 @@ struct Tracer {
   }
 
   // Marches one ray from camera-space origin `o` along unit `d`; returns the index of the
-  // pixel whose light it brings, or -1. The ray is projected to the screen and sampled at up to
-  // max_steps evenly spaced, jittered points (one per pixel along the major axis when steps
-  // allow); its depth is interpolated perspective-correctly (1/z is linear in screen space,
-  // McGuire & Mara 2014) and tested against the mesh of surface_model.h.
+  // pixel whose light it brings (marked as surface_model.h says when seen from behind), or -1. The
+  // ray is projected to the screen and sampled at up to max_steps evenly spaced, jittered points
+  // (one per pixel along the major axis when steps allow); its depth is interpolated
+  // perspective-correctly (1/z is linear in screen space, McGuire & Mara 2014) and tested against
+  // the mesh of surface_model.h.
   int march_ray(const Vec3f& o, const Vec3f& d, float jitter, int self_x, int self_y) const {
     float t_end =
         settings.max_distance > 0 ? static_cast<float>(settings.max_distance) : kFarFactor * o.z;
@@ -269,19 +270,32 @@ struct Tracer {
     return iy * width + ix;
   }
 
-  // Calls on_ray(k, hit_index, direction) for each ray of surface pixel (x, y).
+  // Calls on_ray(k, hit_index, direction) for each ray of surface pixel (x, y), hits marked as
+  // mark_hit says.
   template <typename OnRay>
   void trace_pixel(int x, int y, const OnRay& on_ray) const {
     const PixelRays rays(g, settings, x, y);
     for (int k = 0; k < settings.rays; ++k) {
       float jitter;
       const Vec3f d = rays.direction(k, &jitter);
-      on_ray(k, march_ray(rays.origin(), d, jitter, x, y), d);
+      const int hit = march_ray(rays.origin(), d, jitter, x, y);
+      on_ray(k, hit >= 0 ? mark_hit(g, hit, rays.origin()) : hit, d);
     }
   }
 };
 
 }  // namespace
+
+std::int32_t mark_hit(const GBuffer& g, std::int32_t hit, const Vec3f& origin) {
+  const int x = hit % g.width(), y = hit / g.width();
+  const Vec3d p =
+      g.camera.unproject(x + g.data_window.x0 - g.display_window.x0 + 0.5,
+                         y + g.data_window.y0 - g.display_window.y0 + 0.5, g.depth.plane(0)[hit]);
+  const double behind = (origin.x - p.x) * g.normal.plane(0)[hit] +
+                        (origin.y - p.y) * g.normal.plane(1)[hit] +
+                        (origin.z - p.z) * g.normal.plane(2)[hit];
+  return mark_side(hit, behind < 0);
+}
 
 PixelRays::PixelRays(const GBuffer& g, const GiSettings& settings, int x, int y) {
   const int px = x + g.data_window.x0 - g.display_window.x0;

@@ -10,6 +10,7 @@
 #include "environment.h"
 #include "ssgi/gbuffer.h"
 #include "ssgi/settings.h"
+#include "surface_model.h"
 
 namespace ssgi::detail {
 
@@ -39,8 +40,13 @@ class PixelRays {
   PixelNoise noise_;
 };
 
+// A hit on pixel `hit` (>= 0, data window) of a ray from camera-space `origin`, marked when the
+// ray meets it from behind (surface_model.h).
+std::int32_t mark_hit(const GBuffer& g, std::int32_t hit, const Vec3f& origin);
+
 // Where each ray of each pixel ended, kept so that further bounces re-gather without
-// re-marching: the hit pixel's index (y * width + x, data window) or -1 for a miss, and per
+// re-marching: the hit pixel's index (y * width + x, data window; kSeenFromBehind marks a hit from
+// behind) or -1 for a miss, and per
 // pixel the number of missing rays and the sum of the environment radiance they saw.
 struct RayHits {
   int rays = 0;

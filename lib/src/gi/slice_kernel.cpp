@@ -160,14 +160,31 @@ int MarchSide(const MeshView& mesh, const SliceFrame& f, const SideMarch& m, Sid
     const VF x = hn::Mul(z, hn::Mul(hn::Sub(px, hn::Set(d, m.cx)), hn::Set(d, m.inv_fx)));
     const VF y = hn::Mul(z, hn::Mul(hn::Sub(hn::Set(d, m.cy), py), hn::Set(d, m.inv_fy)));
     const std::size_t at = static_cast<std::size_t>(j) + 1;
-    hn::StoreU(hn::IfThenElse(valid_i, pixel, hn::Set(di, -1)), di, out->pixel.data() + at);
+    const VF wx = hn::Sub(x, ox), wy = hn::Sub(y, oy), wz = hn::Sub(z, oz);
+    // Seen from behind (surface_model.h): the origin is behind the vertex's tangent plane,
+    // n . o < n . p with p = r / h the vertex's point (r its ray at z = 1, h its 1/z).
+    const VF half = hn::Set(d, 0.5f);
+    const VF vx = hn::IfThenElse(
+        hn::RebindMask(d, pick_a), fi,
+        hn::IfThenElse(hn::And(hn::RebindMask(d, pick_b), hn::Not(upper)), fi, hn::Add(fi, one)));
+    const VF vy = hn::IfThenElse(
+        hn::RebindMask(d, pick_a), fj,
+        hn::IfThenElse(hn::And(hn::RebindMask(d, pick_b), upper), fj, hn::Add(fj, one)));
+    const VF hv = hn::IfThenElse(hn::RebindMask(d, pick_a), ia,
+                                 hn::IfThenElse(hn::RebindMask(d, pick_b), ib, ic));
+    const VF rx = hn::Mul(hn::Sub(hn::Add(vx, half), hn::Set(d, m.cx)), hn::Set(d, m.inv_fx));
+    const VF ry = hn::Mul(hn::Sub(hn::Set(d, m.cy), hn::Add(vy, half)), hn::Set(d, m.inv_fy));
+    const VF n_dot_o = hn::Add(hn::Add(hn::Mul(nx, ox), hn::Mul(ny, oy)), hn::Mul(nz, oz));
+    const VF n_dot_r = hn::Add(hn::Add(hn::Mul(nx, rx), hn::Mul(ny, ry)), nz);
+    const auto behind = hn::RebindMask(di, hn::Lt(hn::Mul(hv, n_dot_o), n_dot_r));
+    const VI marked = hn::IfThenElse(behind, hn::Or(pixel, hn::Set(di, kSeenFromBehind)), pixel);
+    hn::StoreU(hn::IfThenElse(valid_i, marked, hn::Set(di, -1)), di, out->pixel.data() + at);
     hn::StoreU(x, d, out->x.data() + at);
     hn::StoreU(y, d, out->y.data() + at);
     hn::StoreU(z, d, out->z.data() + at);
     hn::StoreU(nx, d, out->nx.data() + at);
     hn::StoreU(ny, d, out->ny.data() + at);
     hn::StoreU(nz, d, out->nz.data() + at);
-    const VF wx = hn::Sub(x, ox), wy = hn::Sub(y, oy), wz = hn::Sub(z, oz);
     hn::StoreU(SectorCoordinate(d, f, wx, wy, wz), d, out->front_u.data() + at);
     hn::StoreU(
         SectorCoordinate(d, f, hn::Sub(hn::Mul(back_scale, x), ox),
@@ -272,13 +289,23 @@ int march_side_scalar(const MeshView& mesh, const SliceFrame& f, const SideMarch
     const float wa = upper ? 1.0f - fu : 1.0f - fv;
     const float wb = upper ? fu - fv : fv - fu;
     const float wc = upper ? fv : fu;
-    const float z = 1.0f / (wa * mesh.texels[a].inverse_depth + wb * mesh.texels[b].inverse_depth +
-                            wc * mesh.texels[c].inverse_depth);
-    const int pixel = wa >= wb && wa >= wc ? a : wb >= wc ? b : c;
+    const float ia = mesh.texels[a].inverse_depth, ib = mesh.texels[b].inverse_depth,
+                ic = mesh.texels[c].inverse_depth;
+    const float z = 1.0f / (wa * ia + wb * ib + wc * ic);
+    const bool pick_a = wa >= wb && wa >= wc, pick_b = wb >= wc;
+    const int pixel = pick_a ? a : pick_b ? b : c;
     const MeshTexel& t = mesh.texels[pixel];
     constexpr float k = 1.0f / 127.0f;
     const float n[3] = {k * static_cast<float>(t.nx), k * static_cast<float>(t.ny),
                         k * static_cast<float>(t.nz)};
+    // Seen from behind: the origin behind the vertex's tangent plane (the SIMD kernel's terms).
+    const float vx = pick_a || (pick_b && !upper) ? fi : fi + 1.0f;
+    const float vy = pick_a || (pick_b && upper) ? fj : fj + 1.0f;
+    const float hv = pick_a ? ia : pick_b ? ib : ic;
+    const float rx = ((vx + 0.5f) - m.cx) * m.inv_fx, ry = (m.cy - (vy + 0.5f)) * m.inv_fy;
+    const float n_dot_o = (n[0] * f.ox + n[1] * f.oy) + n[2] * f.oz;
+    const float n_dot_r = (n[0] * rx + n[1] * ry) + n[2];
+    const bool behind = hv * n_dot_o < n_dot_r;
     const float x = z * ((px - m.cx) * m.inv_fx), y = z * ((m.cy - py) * m.inv_fy);
     const float wx = x - f.ox, wy = y - f.oy, wz = z - f.oz;
     if (m.max_distance2 > 0 && wx * wx + wy * wy + wz * wz > m.max_distance2) {
@@ -304,7 +331,7 @@ int march_side_scalar(const MeshView& mesh, const SliceFrame& f, const SideMarch
       }
     }
     out->bits[j] = sector_bits(lo, hi);
-    out->pixel[j + 1] = pixel;
+    out->pixel[j + 1] = mark_side(pixel, behind);
     before_valid = true;
     before_x = x, before_y = y, before_z = z;
     before_n[0] = n[0], before_n[1] = n[1], before_n[2] = n[2];

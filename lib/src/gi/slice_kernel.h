@@ -10,6 +10,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "surface_model.h"
+
 namespace ssgi::detail {
 
 constexpr float kSlicePi = 3.14159265358979f;
@@ -95,7 +97,8 @@ struct SideMarch {
 
 // What march_side leaves per step j: bits[j], the sectors the sample's slab shadows together
 // with the strip to sample j - 1 when both lie on one continuous surface (0 where the side
-// meets no surface), and pixel[j + 1], the vertex whose light it brings (-1: none). The other
+// meets no surface), and pixel[j + 1], the vertex whose light it brings (-1: none), marked
+// kSeenFromBehind when the ray to the sample meets its surface from behind. The other
 // arrays are the kernel's own (index j + 1 for step j, index 0 standing for "no step before the
 // first"), padded to whole vectors.
 struct SideSamples {

@@ -11,6 +11,14 @@
 // brings is that of the hit triangle's vertex with the largest barycentric weight. Thickness is
 // relative to depth so that the model does not depend on the scene's units. Background pixels
 // (z = +inf) are not vertices.
+//
+// A ray that meets a surface from behind sees the surface's unseen back, not the lit front the
+// frame shows: it does when its origin lies behind the tangent plane of the vertex whose light
+// it brings (the plane through the vertex's point across its normal). It then brings the light
+// of that vertex's back: its albedo x the indirect light it gathered in the bounce before (its
+// direct light and emission belong to the front), and nothing in the first bounce. The tracers
+// mark such hits with kSeenFromBehind in the hit's index. (The hit triangle's own plane would
+// misjudge the chamfers the mesh puts across concave corners.)
 #pragma once
 
 #include <cmath>
@@ -21,6 +29,17 @@
 #include "ssgi/image.h"
 
 namespace ssgi::detail {
+
+// Set in a hit's pixel index when the ray meets that surface from behind (see above).
+constexpr std::int32_t kSeenFromBehind = std::int32_t{1} << 30;
+
+// `pixel`, marked kSeenFromBehind when `behind`.
+inline std::int32_t mark_side(std::int32_t pixel, bool behind) {
+  return behind ? pixel | kSeenFromBehind : pixel;
+}
+
+// The pixel of a hit index, without its mark.
+inline std::int32_t hit_pixel(std::int32_t hit) { return hit & ~kSeenFromBehind; }
 
 struct SurfaceModel {
   float thickness = 0.1f;

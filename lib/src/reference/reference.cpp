@@ -400,8 +400,9 @@ void trace_pixel(const GBuffer& g, const GiSettings& settings, const ReferenceTr
   for (int k = 0; k < hits->rays; ++k) {
     float jitter;  // the march's; Embree needs none
     const Vec3f d = rays.direction(k, &jitter);
-    out[k] = tracer.trace(rays.origin(), d, x, y);
-    if (out[k] >= 0) continue;
+    const int hit = tracer.trace(rays.origin(), d, x, y);
+    out[k] = hit >= 0 ? mark_hit(g, hit, rays.origin()) : hit;
+    if (hit >= 0) continue;
     ++misses;
     if (black_env) continue;
     const auto l = miss_radiance(d);
