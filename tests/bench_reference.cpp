@@ -35,8 +35,9 @@ void BM_TraceReference(benchmark::State& state) {
 
   const ssgi::ThreadLimit limit(threads);
   const ssgi::detail::Environment black;
+  const ssgi::detail::MissModel misses(g, settings.miss, black);
   for (auto _ : state) {
-    const ssgi::detail::RayHits hits = ssgi::detail::trace_reference(g, settings, black);
+    const ssgi::detail::RayHits hits = ssgi::detail::trace_reference(g, settings, misses);
     benchmark::DoNotOptimize(hits.hit.data());
   }
   const double rays = static_cast<double>(surface_pixels) * settings.rays;

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <memory>
 #include <random>
 #include <string>
 #include <vector>
@@ -37,6 +38,8 @@ struct Loaded {
   ssgi::GBuffer g;
   ssgi::GiSettings s;
   ssgi::Image reflected;
+  ssgi::detail::Environment env;
+  std::unique_ptr<ssgi::detail::MissModel> misses;
   ssgi::detail::TraceGrid grid;
   ssgi::detail::WeightedHits hits;
   ssgi::Image traced;
@@ -53,8 +56,9 @@ Loaded& frame() {
     l.scale = ssgi::make_plan(l.seq, l.s).trace_scale;
     for (int k = l.scale; k > 1; k /= 2) ++l.level;
     l.grid = ssgi::detail::make_trace_grid(l.g, l.reflected, l.scale, 0.1f);
-    l.hits = ssgi::detail::trace_slices(l.g, l.grid, l.s, ssgi::detail::Environment());
-    l.traced = ssgi::detail::gather_bounces(l.grid, l.hits, l.s.bounces, 0.5);
+    l.misses = std::make_unique<ssgi::detail::MissModel>(l.g, l.s.miss, l.env);
+    l.hits = ssgi::detail::trace_slices(l.g, l.grid, l.s, *l.misses);
+    l.traced = ssgi::detail::gather_bounces(l.grid, l.hits, l.s.bounces, *l.misses);
     return l;
   }();
   return l;
@@ -66,11 +70,11 @@ void BM_Read(benchmark::State& state) {
   for (auto _ : state)
     benchmark::DoNotOptimize(ssgi::read_gbuffer(l.seq, l.seq.frames.front(), roles, l.in));
 }
-void BM_ReflectedAndClosure(benchmark::State& state) {
+void BM_ReflectedAndMissModel(benchmark::State& state) {
   Loaded& l = frame();
   for (auto _ : state) {
     benchmark::DoNotOptimize(ssgi::detail::reflected_radiance(l.g, false));
-    benchmark::DoNotOptimize(ssgi::detail::closure_weight(l.g, ssgi::MissMode::kAuto));
+    benchmark::DoNotOptimize(ssgi::detail::MissModel(l.g, ssgi::MissMode::kAuto, l.env));
   }
 }
 void BM_TraceGrid(benchmark::State& state) {
@@ -80,14 +84,14 @@ void BM_TraceGrid(benchmark::State& state) {
 }
 void BM_TraceSlices(benchmark::State& state) {
   Loaded& l = frame();
-  const ssgi::detail::Environment env;
-  for (auto _ : state) benchmark::DoNotOptimize(ssgi::detail::trace_slices(l.g, l.grid, l.s, env));
+  for (auto _ : state)
+    benchmark::DoNotOptimize(ssgi::detail::trace_slices(l.g, l.grid, l.s, *l.misses));
   state.counters["hits/sample"] = static_cast<double>(l.hits.entries()) / l.grid.origin.size();
 }
 void BM_Bounces(benchmark::State& state) {
   Loaded& l = frame();
   for (auto _ : state)
-    benchmark::DoNotOptimize(ssgi::detail::gather_bounces(l.grid, l.hits, l.s.bounces, 0.5));
+    benchmark::DoNotOptimize(ssgi::detail::gather_bounces(l.grid, l.hits, l.s.bounces, *l.misses));
 }
 void BM_Denoise(benchmark::State& state) {
   Loaded& l = frame();
@@ -190,7 +194,7 @@ void BM_MarchSideKernel(benchmark::State& state) {
 BENCHMARK(BM_JointBilateralKernel)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_MarchSideKernel)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Read)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_ReflectedAndClosure)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_ReflectedAndMissModel)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_TraceGrid)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_TraceSlices)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Bounces)->Unit(benchmark::kMillisecond);

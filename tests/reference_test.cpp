@@ -139,7 +139,8 @@ TEST(Reference, AgreesWithADenseWalkThroughTheModel) {
   const GiSettings s = reference_settings(4, {0, 0, 0});
   const Frame f = load("sample/sample.0001.exr", s);
   const GBuffer& g = f.g;
-  const detail::RayHits hits = detail::trace_reference(g, s, detail::Environment());
+  const detail::Environment env;
+  const detail::RayHits hits = detail::trace_reference(g, s, detail::MissModel(g, s.miss, env));
   const detail::DepthMesh mesh(g.depth, detail::SurfaceModel{static_cast<float>(s.thickness)});
   int rays = 0, differ = 0;
   for (int p = 0; p < g.width() * g.height(); p += 7) {
@@ -172,15 +173,16 @@ TEST(Reference, SameHitsForAnyThreadCount) {
   const GiSettings s = reference_settings(16, {0.1f, 0.2f, 0.3f});
   const Frame f = load("sample/sample.0001.exr", s);
   const detail::Environment env(s.env_color);
+  const detail::MissModel misses(f.g, s.miss, env);
   detail::RayHits one, two, again;
   {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
-    one = detail::trace_reference(f.g, s, env);
+    one = detail::trace_reference(f.g, s, misses);
   }
   {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
-    two = detail::trace_reference(f.g, s, env);
-    again = detail::trace_reference(f.g, s, env);
+    two = detail::trace_reference(f.g, s, misses);
+    again = detail::trace_reference(f.g, s, misses);
   }
   EXPECT_EQ(one.hit, two.hit);
   EXPECT_EQ(two.hit, again.hit);

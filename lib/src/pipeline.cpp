@@ -15,6 +15,7 @@
 #include "reference.h"
 #include "slices.h"
 #include "ssgi/error.h"
+#include "ssgi/log.h"
 
 namespace ssgi {
 namespace {
@@ -95,17 +96,17 @@ Plan make_plan(const SequenceInfo& seq, const GiSettings& s) {
       misses += env;
       break;
     case MissMode::kFrame:
-      misses += "the mean light the frame's surfaces reflect, and " + env +
-                " for the frame's background fraction";
+      misses +=
+          "an enclosed world: the light of the frame's surfaces facing the ray (an ambient "
+          "cube from the frame's border), no sky";
       break;
     case MissMode::kExtend:
       misses += "the surface at the screen edge extended as its plane, else " + env;
       break;
     case MissMode::kAuto:
-      misses +=
-          "per frame, the frame estimate when its border shows an enclosure (score "
-          "above 0.6), " +
-          env + " when it does not (below 0.4), blended between";
+      misses += "per frame and direction, the sky's share by elevation (" + env +
+                ") and the light of the frame's surfaces facing the ray where the frame's border "
+                "shows surfaces facing that way (-v prints each frame's numbers)";
       break;
   }
   plan.reasons.push_back(misses);
@@ -237,23 +238,24 @@ int pyramid_level(int scale) {
 Image Pipeline::Impl::trace(const GBuffer& g, GBuffer* grid_out) const {
   const GiSettings& s = settings;
   const Image reflected = detail::reflected_radiance(g, plan.gather_emission);
-  const double closure = detail::closure_weight(g, s.miss);
   const detail::TraceGrid grid =
       detail::make_trace_grid(g, reflected, plan.trace_scale, static_cast<float>(s.thickness));
+  const detail::MissModel misses(g, s.miss, env);
+  log_info("frame " + std::to_string(g.frame) + ": " + misses.describe());
   detail::WeightedHits hits;
   switch (s.tracer) {
     case Tracer::kReference:
-      hits = detail::weighted_from_rays(grid, detail::trace_reference(g, s, env));
+      hits = detail::weighted_from_rays(grid, detail::trace_reference(g, s, misses));
       break;
     case Tracer::kScreenSpace:
-      hits = detail::weighted_from_rays(grid, detail::march_screen_space(g, s, env));
+      hits = detail::weighted_from_rays(grid, detail::march_screen_space(g, s, misses));
       break;
     case Tracer::kSlices:
-      hits = detail::trace_slices(g, grid, s, env);
+      hits = detail::trace_slices(g, grid, s, misses);
       break;
   }
   if (grid_out) *grid_out = grid_gbuffer(g, grid);
-  return detail::gather_bounces(grid, hits, s.bounces, closure);
+  return detail::gather_bounces(grid, hits, s.bounces, misses);
 }
 
 Pipeline::TracedLight Pipeline::trace_light(const GBuffer& g) const {

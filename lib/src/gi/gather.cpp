@@ -5,7 +5,6 @@
 #include <cmath>
 #include <limits>
 
-#include "misses.h"
 #include "parallel.h"
 #include "surface_model.h"
 
@@ -114,6 +113,7 @@ WeightedHits weighted_from_rays(const TraceGrid& grid, const RayHits& rays) {
   const int w = grid.width, h = grid.height;
   hits.miss = Image(w, h, 1);
   hits.env = Image(w, h, 3);
+  hits.cube = Image(w, h, kCubeFaces);
   hits.begin.resize(n + 1);
   const float inv = 1.0f / static_cast<float>(rays.rays);
   for (std::size_t s = 0; s < n; ++s) {
@@ -128,6 +128,7 @@ WeightedHits weighted_from_rays(const TraceGrid& grid, const RayHits& rays) {
     }
     hits.miss.plane(0)[s] = rays.miss_count.plane(0)[p] * inv;
     for (int c = 0; c < 3; ++c) hits.env.plane(c)[s] = rays.env_sum.plane(c)[p] * inv;
+    for (int f = 0; f < kCubeFaces; ++f) hits.cube.plane(f)[s] = rays.cube_sum.plane(f)[p] * inv;
   }
   hits.begin[n] = static_cast<std::uint32_t>(hits.pixel.size());
   return hits;
@@ -135,19 +136,24 @@ WeightedHits weighted_from_rays(const TraceGrid& grid, const RayHits& rays) {
 
 namespace {
 
-// One gather: the light `radiance(pixel)` of every hit, plus the miss light.
+using CubeLight = std::array<std::array<float, 3>, kCubeFaces>;
+
+// One gather: the light `radiance(hit)` of every hit, plus the misses' environment light and
+// their cube shares x the cube's colours.
 template <typename Radiance>
 Image gather_once(const TraceGrid& grid, const WeightedHits& hits, const Radiance& radiance,
-                  const MissLight& miss) {
+                  const CubeLight& cube) {
   Image out(grid.width, grid.height, 3);
   parallel_for_rows(grid.height, [&](int by) {
     for (int bx = 0; bx < grid.width; ++bx) {
       const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
       if (grid.origin[s] < 0) continue;
-      const float m = hits.miss.plane(0)[s];
       std::array<float, 3> sum;
-      for (int c = 0; c < 3; ++c)
-        sum[c] = miss.env_weight * hits.env.plane(c)[s] + m * miss.frame_radiance[c];
+      for (int c = 0; c < 3; ++c) sum[c] = hits.env.plane(c)[s];
+      for (int f = 0; f < kCubeFaces; ++f) {
+        const float share = hits.cube.plane(f)[s];
+        for (int c = 0; c < 3; ++c) sum[c] += share * cube[f][c];
+      }
       for (std::uint32_t e = hits.begin[s]; e < hits.begin[s + 1]; ++e) {
         const std::array<float, 3> l = radiance(hits.pixel[e]);
         for (int c = 0; c < 3; ++c) sum[c] += hits.weight[e] * l[c];
@@ -158,29 +164,10 @@ Image gather_once(const TraceGrid& grid, const WeightedHits& hits, const Radianc
   return out;
 }
 
-// The mean of `radiance` over the grid's origins, for the frame estimate of misses.
-template <typename Radiance>
-MissLight miss_light_over_grid(const TraceGrid& grid, const Radiance& radiance, double closure) {
-  MissLight miss;
-  miss.env_weight = static_cast<float>(1.0 - closure);
-  if (closure <= 0) return miss;
-  // Sums in double, in a fixed order: the same bits for any thread count.
-  double sum[3] = {0, 0, 0};
-  std::size_t n = 0;
-  for (std::size_t s = 0; s < grid.origin.size(); ++s) {
-    if (grid.origin[s] < 0) continue;
-    const std::array<float, 3> l = radiance(static_cast<int>(s));
-    for (int c = 0; c < 3; ++c) sum[c] += l[c];
-    ++n;
-  }
-  for (int c = 0; c < 3; ++c)
-    miss.frame_radiance[c] = n ? static_cast<float>(closure * sum[c] / n) : 0.0f;
-  return miss;
-}
-
 }  // namespace
 
-Image gather_bounces(const TraceGrid& grid, const WeightedHits& hits, int bounces, double closure) {
+Image gather_bounces(const TraceGrid& grid, const WeightedHits& hits, int bounces,
+                     const MissModel& misses) {
   // Each bounce's light per trace sample, packed RGB_ so that a hit is one 16-byte load: at 2 s
   // the light of its front (what it reflects plus albedo x its indirect light), at 2 s + 1 that
   // of its unseen back (albedo x indirect only), which hits from behind bring (surface_model.h).
@@ -194,8 +181,7 @@ Image gather_bounces(const TraceGrid& grid, const WeightedHits& hits, int bounce
         light[2 * static_cast<std::size_t>(hit_pixel(hit)) + (hit >= kSeenFromBehind ? 1 : 0)];
     return std::array<float, 3>{l[0], l[1], l[2]};
   };
-  auto front = [&](int s) { return lookup(s); };
-  Image indirect = gather_once(grid, hits, lookup, miss_light_over_grid(grid, front, closure));
+  Image indirect = gather_once(grid, hits, lookup, misses.cube_light(grid, light.data(), 2));
   for (int b = 1; b < bounces; ++b) {
     parallel_for_rows(grid.height, [&](int by) {
       for (int bx = 0; bx < grid.width; ++bx) {
@@ -207,7 +193,7 @@ Image gather_bounces(const TraceGrid& grid, const WeightedHits& hits, int bounce
         }
       }
     });
-    indirect = gather_once(grid, hits, lookup, miss_light_over_grid(grid, front, closure));
+    indirect = gather_once(grid, hits, lookup, misses.cube_light(grid, light.data(), 2));
   }
   return indirect;
 }

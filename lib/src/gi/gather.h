@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "march.h"
+#include "misses.h"
 #include "ssgi/gbuffer.h"
 #include "ssgi/image.h"
 
@@ -44,6 +45,7 @@ struct WeightedHits {
   std::vector<float> weight;         // its share of the cosine-weighted hemisphere
   Image miss;                        // 1 channel: the share that met nothing
   Image env;                         // 3 channels: environment light of those directions
+  Image cube;                        // kCubeFaces channels: their shares of the miss model's cube
   std::size_t entries() const { return pixel.size(); }
 };
 
@@ -53,8 +55,9 @@ WeightedHits weighted_from_rays(const TraceGrid& grid, const RayHits& rays);
 // Indirect light at the trace grid after `bounces` gathers over `hits`: a hit brings its
 // sample's reflected light plus, from the second bounce on, its albedo x the indirect light it
 // gathered in the bounce before (a hit from behind only the latter: surface_model.h); the missed
-// share brings the miss model's light (misses.h,
-// with `closure` from closure_weight). 0 where the grid has no origin.
-Image gather_bounces(const TraceGrid& grid, const WeightedHits& hits, int bounces, double closure);
+// share brings its environment light plus its cube shares x the cube colours `misses` finds at
+// that bounce (misses.h). 0 where the grid has no origin.
+Image gather_bounces(const TraceGrid& grid, const WeightedHits& hits, int bounces,
+                     const MissModel& misses);
 
 }  // namespace ssgi::detail

@@ -14,38 +14,20 @@ namespace {
 struct Tracer {
   const GBuffer& g;
   const GiSettings& settings;
-  const Environment& env;
   SurfaceModel model;
   DepthMesh mesh;
   int width, height;
   int offset_x, offset_y;  // data window origin in display-window pixels
-  double cam_to_world[3][3];
-  bool rotate_to_world;
 
-  Tracer(const GBuffer& gb, const GiSettings& s, const Environment& e)
+  Tracer(const GBuffer& gb, const GiSettings& s)
       : g(gb),
         settings(s),
-        env(e),
         model{static_cast<float>(s.thickness)},
         mesh(gb.depth, model),
         width(gb.width()),
         height(gb.height()),
         offset_x(gb.data_window.x0 - gb.display_window.x0),
-        offset_y(gb.data_window.y0 - gb.display_window.y0),
-        rotate_to_world(gb.camera.has_world_transform) {
-    const Mat4d inv = rotate_to_world ? gb.camera.world_to_camera.inverse() : Mat4d();
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) cam_to_world[i][j] = inv.m[i][j];
-  }
-
-  std::array<float, 3> miss_radiance(const Vec3f& d) const {
-    if (env.is_constant()) return env.radiance(d);
-    const auto& m = cam_to_world;  // row-vector: world = d * M
-    const Vec3f w{static_cast<float>(d.x * m[0][0] + d.y * m[1][0] + d.z * m[2][0]),
-                  static_cast<float>(d.x * m[0][1] + d.y * m[1][1] + d.z * m[2][1]),
-                  static_cast<float>(d.x * m[0][2] + d.y * m[1][2] + d.z * m[2][2])};
-    return env.radiance(w);
-  }
+        offset_y(gb.data_window.y0 - gb.display_window.y0) {}
 
   // Marches one ray from camera-space origin `o` along unit `d`; returns the index of the
   // pixel whose light it brings (marked as surface_model.h says when seen from behind), or -1. The
@@ -315,31 +297,38 @@ Vec3f PixelRays::direction(int k, float* jitter) const {
   return cosine_hemisphere(normal_, u1, u2);
 }
 
-RayHits march_screen_space(const GBuffer& g, const GiSettings& settings, const Environment& env) {
-  const Tracer tracer(g, settings, env);
+RayHits::RayHits(const GBuffer& g, int n)
+    : rays(n),
+      hit(static_cast<std::size_t>(g.width()) * g.height() * n, -1),
+      env_sum(g.width(), g.height(), 3),
+      cube_sum(g.width(), g.height(), kCubeFaces),
+      miss_count(g.width(), g.height(), 1) {}
+
+void RayHits::store_misses(std::size_t p, int count, const float env[3],
+                           const float cube[kCubeFaces]) {
+  miss_count.plane(0)[p] = static_cast<float>(count);
+  for (int c = 0; c < 3; ++c) env_sum.plane(c)[p] = env[c];
+  for (int f = 0; f < kCubeFaces; ++f) cube_sum.plane(f)[p] = cube[f];
+}
+
+RayHits march_screen_space(const GBuffer& g, const GiSettings& settings, const MissModel& misses) {
+  const Tracer tracer(g, settings);
   const int w = g.width(), h = g.height(), rays = settings.rays;
-  RayHits hits;
-  hits.rays = rays;
-  hits.hit.assign(static_cast<std::size_t>(w) * h * rays, -1);
-  hits.env_sum = Image(w, h, 3);
-  hits.miss_count = Image(w, h, 1);
+  RayHits hits(g, rays);
   parallel_for_rows(h, [&](int y) {
     for (int x = 0; x < w; ++x) {
       if (!g.is_surface(x, y)) continue;
-      std::int32_t* out = &hits.hit[(static_cast<std::size_t>(y) * w + x) * rays];
-      float env_sum[3] = {0, 0, 0};
-      int misses = 0;
+      const std::size_t p = static_cast<std::size_t>(y) * w + x;
+      std::int32_t* out = &hits.hit[p * rays];
+      float env[3] = {0, 0, 0}, cube[kCubeFaces] = {0, 0, 0, 0, 0, 0};
+      int missed = 0;
       tracer.trace_pixel(x, y, [&](int k, int hit, const Vec3f& d) {
         out[k] = hit;
         if (hit >= 0) return;
-        ++misses;
-        if (!env.is_black()) {
-          const auto l = tracer.miss_radiance(d);
-          for (int c = 0; c < 3; ++c) env_sum[c] += l[c];
-        }
+        ++missed;
+        misses.add(d, 1.0f, env, cube);
       });
-      for (int c = 0; c < 3; ++c) hits.env_sum.at(c, x, y) = env_sum[c];
-      hits.miss_count.at(0, x, y) = static_cast<float>(misses);
+      hits.store_misses(p, missed, env, cube);
     }
   });
   return hits;

@@ -8,6 +8,7 @@
 
 #include "directions.h"
 #include "environment.h"
+#include "misses.h"
 #include "ssgi/gbuffer.h"
 #include "ssgi/settings.h"
 #include "surface_model.h"
@@ -46,23 +47,22 @@ std::int32_t mark_hit(const GBuffer& g, std::int32_t hit, const Vec3f& origin);
 
 // Where each ray of each pixel ended, kept so that further bounces re-gather without
 // re-marching: the hit pixel's index (y * width + x, data window; kSeenFromBehind marks a hit from
-// behind) or -1 for a miss, and per
-// pixel the number of missing rays and the sum of the environment radiance they saw.
+// behind) or -1 for a miss, and per pixel the number of missing rays and the sums of what the
+// miss model gives them (MissModel::add, weight 1 each).
 struct RayHits {
   int rays = 0;
   std::vector<std::int32_t> hit;  // width * height * rays
   Image env_sum;                  // 3 channels
+  Image cube_sum;                 // kCubeFaces channels
   Image miss_count;               // 1 channel
-};
-
-// What a missing ray brings: env_weight x the environment in its direction, plus a constant
-// estimated from the frame (see MissMode).
-struct MissLight {
-  float env_weight = 1.0f;
-  std::array<float, 3> frame_radiance = {0, 0, 0};
+  // Sized for `g` with `rays` rays per pixel, every ray a miss until traced.
+  RayHits(const GBuffer& g, int rays);
+  RayHits() = default;
+  // Stores pixel p's misses: their count and the sums of what they bring.
+  void store_misses(std::size_t p, int count, const float env[3], const float cube[kCubeFaces]);
 };
 
 // Marches settings.rays rays per surface pixel and records their ends.
-RayHits march_screen_space(const GBuffer& g, const GiSettings& settings, const Environment& env);
+RayHits march_screen_space(const GBuffer& g, const GiSettings& settings, const MissModel& misses);
 
 }  // namespace ssgi::detail

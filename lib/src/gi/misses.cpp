@@ -1,39 +1,228 @@
 #include "misses.h"
 
-#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <vector>
+
+#include "gather.h"
 
 namespace ssgi::detail {
+namespace {
 
-double enclosure(const GBuffer& g) {
-  const int w = g.width(), h = g.height();
-  const int ring = std::max(1, std::min(w, h) / 50);
-  std::size_t border = 0, inward = 0;
-  for (int y = 0; y < h; ++y) {
-    for (int x = 0; x < w; ++x) {
-      const int dl = x, dr = w - 1 - x, dt = y, db = h - 1 - y;
-      const int nearest = std::min(std::min(dl, dr), std::min(dt, db));
-      if (nearest >= ring) continue;
-      ++border;
-      if (!g.is_surface(x, y)) continue;
-      const float nx = g.normal.at(0, x, y), ny = g.normal.at(1, x, y);
-      const bool faces_in = (nearest == dt && ny < -0.5f) || (nearest == db && ny > 0.5f) ||
-                            (nearest == dl && nx > 0.5f) || (nearest == dr && nx < -0.5f);
-      inward += faces_in ? 1 : 0;
-    }
-  }
-  return border ? static_cast<double>(inward) / border : 0.0;
+Vec3f normalized(double x, double y, double z) {
+  const double l = std::sqrt(x * x + y * y + z * z);
+  if (!(l > 0)) return {0, 0, 0};
+  return {static_cast<float>(x / l), static_cast<float>(y / l), static_cast<float>(z / l)};
 }
 
-double closure_weight(const GBuffer& g, MissMode mode) {
-  if (mode == MissMode::kEnvironment || mode == MissMode::kExtend) return 0.0;
+// Pool-adjacent-violators: the non-decreasing sequence nearest `v` in least squares weighted
+// by `w` (entries of weight 0 take their neighbours' values).
+template <std::size_t N>
+std::array<float, N> non_decreasing(const std::array<double, N>& v,
+                                    const std::array<double, N>& w) {
+  struct Block {
+    double value, weight;
+    std::size_t count;
+  };
+  std::vector<Block> blocks;
+  for (std::size_t i = 0; i < N; ++i) {
+    if (!(w[i] > 0)) {
+      if (blocks.empty())
+        blocks.push_back({0.0, 0.0, 1});
+      else
+        ++blocks.back().count;
+      continue;
+    }
+    blocks.push_back({v[i], w[i], 1});
+    while (blocks.size() > 1) {
+      Block& b = blocks.back();
+      Block& a = blocks[blocks.size() - 2];
+      if (a.weight > 0 && a.value <= b.value) break;
+      // Merge (an empty leading block takes the next block's value).
+      const double weight = a.weight + b.weight;
+      a.value = weight > 0 ? (a.value * a.weight + b.value * b.weight) / weight : b.value;
+      a.weight = weight;
+      a.count += b.count;
+      blocks.pop_back();
+    }
+  }
+  std::array<float, N> out{};
+  std::size_t i = 0;
+  for (const Block& b : blocks)
+    for (std::size_t k = 0; k < b.count; ++k) out[i++] = static_cast<float>(b.value);
+  return out;
+}
+
+}  // namespace
+
+MissModel::MissModel(const GBuffer& g, MissMode mode, const Environment& env)
+    : env_(env),
+      display_w_(g.display_window.width()),
+      display_h_(g.display_window.height()),
+      offset_x_(g.data_window.x0 - g.display_window.x0),
+      offset_y_(g.data_window.y0 - g.display_window.y0),
+      mode_(mode) {
+  const Camera& cam = g.camera;
+  rotate_ = cam.has_world_transform;
+  // The world's up. Its axes in camera space are the rows of world_to_camera's rotation (row
+  // vectors); of those the camera's x axis runs across (a level camera's x is horizontal), the
+  // one nearest the camera's up, with the sign that points up the screen (or, looking straight
+  // down or up, the one the view points away from). Without a world transform, camera +y.
+  up_ = {0, 1, 0};
+  up_name_ = "+y (camera)";
+  if (rotate_) {
+    const Mat4d& m = cam.world_to_camera;
+    Vec3f world[3];
+    for (int i = 0; i < 3; ++i) world[i] = normalized(m.m[i][0], m.m[i][1], m.m[i][2]);
+    const Mat4d inv = m.inverse();
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) camera_to_world_[i][j] = static_cast<float>(inv.m[i][j]);
+    int up = -1;
+    for (int pass = 0; pass < 2 && up < 0; ++pass)
+      for (int i = 0; i < 3; ++i) {
+        if (pass == 0 && std::fabs(world[i].x) > 0.3f) continue;
+        if (up < 0 || std::fabs(world[i].y) > std::fabs(world[up].y)) up = i;
+      }
+    const Vec3f& a = world[up];
+    const bool flip = std::fabs(a.y) > 1e-3f ? a.y < 0 : a.z > 0;
+    up_ = flip ? Vec3f{-a.x, -a.y, -a.z} : a;
+    up_name_ = std::string(flip ? "-" : "+") + "XYZ"[up] + " (world)";
+  }
+  // The cube's axes: the horizontal right and forward of the view (the view's forward, or
+  // looking straight down or up its up, with the up component taken out), and the world's up.
+  Vec3f forward{-up_.z * up_.x, -up_.z * up_.y, 1.0f - up_.z * up_.z};
+  if (forward.x * forward.x + forward.y * forward.y + forward.z * forward.z < 1e-6f)
+    forward = {-up_.y * up_.x, 1.0f - up_.y * up_.y, -up_.y * up_.z};
+  forward = normalized(forward.x, forward.y, forward.z);
+  const Vec3f right{up_.y * forward.z - up_.z * forward.y, up_.z * forward.x - up_.x * forward.z,
+                    up_.x * forward.y - up_.y * forward.x};
+  axis_[0] = right, axis_[1] = up_, axis_[2] = forward;
+
+  // Over a lattice of the data window: the sky's share by elevation (the pixels showing no
+  // surface), and how much of each cube direction the frame's surfaces near its border face.
   const int w = g.width(), h = g.height();
-  std::size_t surfaces = 0;
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) surfaces += g.is_surface(x, y) ? 1 : 0;
-  const double surface_fraction = static_cast<double>(surfaces) / (static_cast<double>(w) * h);
-  if (mode == MissMode::kFrame) return surface_fraction;
-  const double t = std::clamp((enclosure(g) - 0.4) / 0.2, 0.0, 1.0);
-  return surface_fraction * t * t * (3 - 2 * t);
+  const int stride = std::max(1, static_cast<int>(std::sqrt(static_cast<double>(w) * h) / 256));
+  std::array<double, kElevationBins> sky{}, count{};
+  double facing[kCubeFaces] = {}, border_total = 0;
+  for (int y = stride / 2; y < h; y += stride)
+    for (int x = stride / 2; x < w; x += stride) {
+      const Vec3d v = cam.view_dir(offset_x_ + x + 0.5, offset_y_ + y + 0.5);
+      const float e = static_cast<float>(v.x * up_.x + v.y * up_.y + v.z * up_.z);
+      const int k =
+          std::clamp(static_cast<int>((e + 1.0f) * 0.5f * kElevationBins), 0, kElevationBins - 1);
+      count[k] += 1;
+      if (!g.is_surface(x, y)) {
+        sky[k] += 1;
+        continue;
+      }
+      const double b = border_weight(offset_x_ + x + 0.5, offset_y_ + y + 0.5);
+      const float n[3] = {g.normal.at(0, x, y), g.normal.at(1, x, y), g.normal.at(2, x, y)};
+      for (int i = 0; i < 3; ++i) {
+        const float a = n[0] * axis_[i].x + n[1] * axis_[i].y + n[2] * axis_[i].z;
+        facing[2 * i + (a <= 0 ? 0 : 1)] += b * a * a;
+      }
+      border_total += b;
+    }
+  std::array<double, kElevationBins> share{};
+  for (int k = 0; k < kElevationBins; ++k) {
+    seen_[k] = static_cast<int>(count[k]);
+    share[k] = count[k] > 0 ? sky[k] / count[k] : 0;
+  }
+  // A direction is enclosed as far as the frame's border surfaces face it: fully from half an
+  // average face's weight (the faces' weights sum to border_total). Behind the camera no surface
+  // the frame shows can face: the mean of the two sides stands in for it.
+  for (int f = 0; f < kCubeFaces; ++f)
+    enclosed_[f] = border_total > 0
+                       ? static_cast<float>(std::min(1.0, facing[f] / (0.5 * border_total / 6)))
+                       : 0.0f;
+  enclosed_[5] = std::max(enclosed_[5], 0.5f * (enclosed_[0] + enclosed_[1]));
+  switch (mode) {
+    case MissMode::kEnvironment:
+    case MissMode::kExtend:
+      sky_.fill(1.0f);
+      break;
+    case MissMode::kFrame:
+      sky_.fill(0.0f);
+      enclosed_.fill(1.0f);
+      break;
+    case MissMode::kAuto:
+      // Non-decreasing upwards; beyond the elevations the frame shows, the nearest it shows.
+      sky_ = non_decreasing(share, count);
+      break;
+  }
+}
+
+double MissModel::border_weight(double x, double y) const {
+  const double falloff = 1.0 / (kBorder * std::min(display_w_, display_h_));
+  const double d = std::min(std::min(x, display_w_ - x), std::min(y, display_h_ - y));
+  return std::exp(-std::max(d, 0.0) * falloff);
+}
+
+std::array<float, 3> MissModel::environment(const Vec3f& d) const {
+  if (env_.is_constant() || !rotate_) return env_.radiance(d);
+  const auto& m = camera_to_world_;  // row vectors: world = d * M
+  return env_.radiance({d.x * m[0][0] + d.y * m[1][0] + d.z * m[2][0],
+                        d.x * m[0][1] + d.y * m[1][1] + d.z * m[2][1],
+                        d.x * m[0][2] + d.y * m[1][2] + d.z * m[2][2]});
+}
+
+std::array<std::array<float, 3>, kCubeFaces> MissModel::cube_light(
+    const TraceGrid& grid, const std::array<float, 4>* light, std::size_t stride) const {
+  // Sums in double, in a fixed order: the same bits for any thread count.
+  double sum[kCubeFaces][3] = {}, weight[kCubeFaces] = {}, total[3] = {};
+  std::size_t n = 0;
+  // Samples near the display window's border weigh most (border_weight): the surfaces a ray
+  // meets beyond the frame continue those at its edge.
+  std::vector<double> border(static_cast<std::size_t>(grid.width) + grid.height);
+  for (int bx = 0; bx < grid.width; ++bx)
+    border[bx] = border_weight(offset_x_ + (bx + 0.5) * grid.scale, display_h_ / 2);
+  for (int by = 0; by < grid.height; ++by)
+    border[grid.width + by] = border_weight(display_w_ / 2, offset_y_ + (by + 0.5) * grid.scale);
+  double weight_all = 0;
+  for (std::size_t s = 0; s < grid.origin.size(); ++s) {
+    if (grid.origin[s] < 0) continue;
+    const std::array<float, 4>& l = light[stride * s];
+    const double b = std::max(border[s % grid.width], border[grid.width + s / grid.width]);
+    const float nx = grid.normal.plane(0)[s], ny = grid.normal.plane(1)[s],
+                nz = grid.normal.plane(2)[s];
+    for (int i = 0; i < 3; ++i) {
+      const float a = nx * axis_[i].x + ny * axis_[i].y + nz * axis_[i].z;
+      const int face = 2 * i + (a <= 0 ? 0 : 1);  // a ray along +axis meets normals facing -axis
+      const double w = b * a * a;
+      weight[face] += w;
+      for (int c = 0; c < 3; ++c) sum[face][c] += w * l[c];
+    }
+    for (int c = 0; c < 3; ++c) total[c] += b * l[c];
+    weight_all += b;
+    ++n;
+  }
+  std::array<std::array<float, 3>, kCubeFaces> out{};
+  if (n == 0 || !(weight_all > 0)) return out;
+  // A face few surfaces face is drawn towards the (border-weighted) mean: a prior worth a
+  // quarter of an average face's weight (the faces' weights sum to weight_all).
+  const double prior = 0.25 * weight_all / kCubeFaces;
+  for (int f = 0; f < kCubeFaces; ++f)
+    for (int c = 0; c < 3; ++c)
+      out[f][c] =
+          static_cast<float>((sum[f][c] + prior * total[c] / weight_all) / (weight[f] + prior));
+  return out;
+}
+
+std::string MissModel::describe() const {
+  std::string s = "misses (";
+  s += mode_ == MissMode::kAuto ? "auto" : mode_ == MissMode::kFrame ? "frame" : "env";
+  s += "): up " + up_name_ + "; sky share by elevation -90..90 deg:";
+  char buf[64];
+  for (int k = 0; k < kElevationBins; ++k) {
+    std::snprintf(buf, sizeof buf, " %.2f%s", sky_[k], seen_[k] > 0 ? "" : "*");
+    s += buf;
+  }
+  s += " (* not in the frame); enclosed right left up down forward back:";
+  for (int f = 0; f < kCubeFaces; ++f) {
+    std::snprintf(buf, sizeof buf, " %.2f", enclosed_[f]);
+    s += buf;
+  }
+  return s;
 }
 
 }  // namespace ssgi::detail

@@ -1,23 +1,120 @@
-// What rays that hit nothing bring (MissMode), and the bounce loop that re-gathers over the
-// same rays. Shared by the screen-space march and the Embree reference.
+// What rays that meet nothing bring: the miss model, decided per frame from what the frame
+// shows, and shared by the slice tracer, the march and the Embree reference (man/ssgi.1,
+// MISSES, says the same for users).
+//
+// A ray misses when it leaves the frame, or passes behind everything the frame shows. Beyond
+// the frame it meets either the sky or a surface the frame does not show (a wall, floor,
+// ceiling or the ground). The model takes from the frame:
+//  - the world's up (from the camera's world transform);
+//  - the sky's share by elevation: the fraction of the frame's pixels at each elevation that
+//    show no surface, made non-decreasing upwards (the sky is above the ground) and held at the
+//    nearest elevation the frame shows above and below those it shows;
+//  - six cube directions (the view's horizontal right, left, forward and back, up and down)
+//    and, for each, how far it is enclosed: how much the frame's surfaces near its border
+//    (border_weight) face that way. Behind the camera, which no visible surface can face, is
+//    enclosed at least as much as the mean of right and left;
+//  - per bounce, each direction's colour: the light of the border surfaces facing it.
+// The part of a miss along d that is not sky is split over the cube's directions by d's squared
+// components; each part meets a surface as far as its direction is enclosed, and brings that
+// direction's colour (an ambient cube, Mitchell et al. 2006). The remainder
+// brings the environment in its direction (the --env map or colour, black by default: renderers
+// that sample the sky as a light have its light in the direct pass). `--miss env` sends every
+// miss to the environment, `frame` encloses every direction under no sky, `auto` measures.
+//
+// The tracers accumulate, per trace sample, the environment light of their misses and six cube
+// shares (MissModel::add); the bounce loop multiplies the shares by that bounce's colours.
 #pragma once
 
-#include "march.h"
+#include <algorithm>
+#include <array>
+#include <cstddef>
+#include <string>
+
+#include "directions.h"
+#include "environment.h"
 #include "ssgi/gbuffer.h"
 #include "ssgi/settings.h"
 
 namespace ssgi::detail {
 
-// How enclosed the camera is, in [0, 1], from the frame's border: the fraction of border
-// pixels whose surface runs alongside the view on its side (a ceiling along the top edge faces
-// down, a floor along the bottom faces up, side walls face inwards). A room seen from inside
-// scores near 1; a set seen from outside (a backdrop along the top, sky) scores low.
-double enclosure(const GBuffer& g);
+struct TraceGrid;
 
-// The weight of the frame estimate for misses: 0 for kEnvironment and kExtend; the fraction of
-// the frame that shows surfaces for kFrame; for kAuto that fraction times a smooth ramp of the
-// enclosure from 0 at 0.4 to 1 at 0.6, so that a score near the threshold does not switch
-// abruptly between frames.
-double closure_weight(const GBuffer& g, MissMode mode);
+constexpr int kCubeFaces = 6;  // right, left, up, down, forward, back: rays heading that way
+
+class MissModel {
+ public:
+  static constexpr int kElevationBins = 16;  // equal solid angle: uniform in sin(elevation)
+
+  // The model of frame `g` for `mode`, its sky share measured on a lattice of the data
+  // window's pixels (every pixel up to 256 x 256 of them, else a stride that keeps about that).
+  MissModel(const GBuffer& g, MissMode mode, const Environment& env);
+
+  // Adds what a miss along camera-space unit direction `d` of weight `w` brings: the
+  // environment's light to env[3], the cube's shares to cube[6].
+  void add(const Vec3f& d, float w, float env[3], float cube[kCubeFaces]) const {
+    const float open = 1.0f - sky_share(d);  // what is not sky
+    // Each cube direction takes its squared component of the ray, as far as it is enclosed.
+    float surfaces = 0;
+    for (int i = 0; i < 3; ++i) {
+      const float a = d.x * axis_[i].x + d.y * axis_[i].y + d.z * axis_[i].z;
+      const int f = 2 * i + (a >= 0 ? 0 : 1);
+      const float share = open * a * a * enclosed_[f];
+      cube[f] += w * share;
+      surfaces += share;
+    }
+    if (env_.is_black() || !(surfaces < 1.0f)) return;
+    const std::array<float, 3> l = environment(d);
+    for (int c = 0; c < 3; ++c) env[c] += w * (1.0f - surfaces) * l[c];
+  }
+
+  // The share of the sky along camera-space unit direction `d`.
+  float sky_share(const Vec3f& d) const {
+    const float e = d.x * up_.x + d.y * up_.y + d.z * up_.z;  // sin(elevation)
+    const float f = std::min(std::max((e + 1.0f) * 0.5f * kElevationBins - 0.5f, 0.0f),
+                             static_cast<float>(kElevationBins - 1));
+    const int k = std::min(static_cast<int>(f), kElevationBins - 2);
+    return sky_[k] + (f - static_cast<float>(k)) * (sky_[k + 1] - sky_[k]);
+  }
+
+  // The environment's light along camera-space direction `d` (world-space maps rotated).
+  std::array<float, 3> environment(const Vec3f& d) const;
+
+  bool environment_is_black() const { return env_.is_black(); }
+
+  // The cube's colours for one bounce: light[stride * s] is trace sample s's light (what it
+  // reflects plus albedo x its indirect light; RGB and one unused float), over the samples with
+  // an origin.
+  std::array<std::array<float, 3>, kCubeFaces> cube_light(const TraceGrid& grid,
+                                                          const std::array<float, 4>* light,
+                                                          std::size_t stride) const;
+
+  // One line for -v: the up axis, the sky share by elevation, where it came from.
+  std::string describe() const;
+
+  const std::array<float, kElevationBins>& sky_by_elevation() const { return sky_; }
+
+ private:
+  // How much a surface at display-window position (x, y) speaks for what lies beyond the
+  // frame: exp(-d / (kBorder x the display window's smaller side)), d its distance to the
+  // nearest edge.
+  double border_weight(double x, double y) const;
+  static constexpr double kBorder = 0.1;
+
+  const Environment& env_;
+  double display_w_, display_h_;  // the display window's size
+  double offset_x_, offset_y_;    // the data window's origin in it
+  // The cube's axes in camera space: the view's horizontal right, the world's up, the view's
+  // horizontal forward; face 2 i is +axis i, 2 i + 1 its opposite (so 5 is behind the camera).
+  Vec3f axis_[3];
+  // Per face, how far a miss heading that way meets a surface rather than the environment.
+  std::array<float, kCubeFaces> enclosed_{};
+  Vec3f up_;  // the world's up axis in camera space
+  std::string up_name_;
+  std::array<float, kElevationBins> sky_{};
+  std::array<int, kElevationBins> seen_{};  // trace samples per bin (for describe)
+  MissMode mode_;
+  bool rotate_ = false;
+  float camera_to_world_[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+};
 
 }  // namespace ssgi::detail

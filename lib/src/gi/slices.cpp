@@ -170,20 +170,19 @@ struct SliceTracer {
   const GBuffer& g;
   const TraceGrid& grid;
   const GiSettings& settings;
-  const Environment& env;
+  const MissModel& misses;
   SurfaceModel model;
   PackedMesh mesh;
   MeshView mesh_view;
   int w, h;              // the frame's data window
   float fx, fy, cx, cy;  // the camera in trace-grid units
   float inv_fx, inv_fy;
-  double cam_to_world[3][3];
 
-  SliceTracer(const GBuffer& gb, const TraceGrid& gr, const GiSettings& s, const Environment& e)
+  SliceTracer(const GBuffer& gb, const TraceGrid& gr, const GiSettings& s, const MissModel& m)
       : g(gb),
         grid(gr),
         settings(s),
-        env(e),
+        misses(m),
         model{static_cast<float>(s.thickness)},
         mesh(gr.depth, gr.normal, model),
         mesh_view(mesh.view()),
@@ -194,60 +193,50 @@ struct SliceTracer {
         cx(gr.cx),
         cy(gr.cy),
         inv_fx(1.0f / gr.fx),
-        inv_fy(1.0f / gr.fy) {
-    const Camera& cam = gb.camera;
-    const Mat4d inv = cam.has_world_transform ? cam.world_to_camera.inverse() : Mat4d();
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) cam_to_world[i][j] = inv.m[i][j];
-  }
+        inv_fy(1.0f / gr.fy) {}
 
   // The camera-space direction through trace-grid coordinates (sx, sy), at z = 1.
   V3 ray(float sx, float sy) const { return {(sx - cx) * inv_fx, (cy - sy) * inv_fy, 1.0f}; }
 
-  std::array<float, 3> env_radiance(V3 d) const {
-    if (env.is_constant()) return env.radiance({d.x, d.y, d.z});
-    const auto& m = cam_to_world;  // row-vector: world = d * M
-    return env.radiance({static_cast<float>(d.x * m[0][0] + d.y * m[1][0] + d.z * m[2][0]),
-                         static_cast<float>(d.x * m[0][1] + d.y * m[1][1] + d.z * m[2][1]),
-                         static_cast<float>(d.x * m[0][2] + d.y * m[1][2] + d.z * m[2][2])});
-  }
-
-  // The environment's light along each missed sector's ray: the angle where the slice's
-  // measure reaches (k + u_rot) / to_sector above its lowest value, found on a table of the
-  // measure at kEnvAngles + 1 evenly spaced angles (their sines and cosines by rotation, not
-  // by libm) and interpolated in it; the ray's direction interpolated between the table's.
-  void add_sector_env_light(std::uint32_t missed, const SliceMeasure& measure, float lo_theta,
-                            float hi_theta, float h_lo, float to_sector, float u_rot,
-                            const V3& view, const V3& t, float sector_weight,
-                            float env_light[3]) const {
-    constexpr int kEnvAngles = 64;
-    const float step = (hi_theta - lo_theta) / kEnvAngles;
+  // What the missed sectors of a slice bring (misses.h): the half-disc cut into kMissBins
+  // equal angles, each bin's missed sectors (those whose coordinate falls in it) sent along the
+  // bin's middle direction. The angles' sines and cosines by rotation, not by libm.
+  void add_slice_misses(std::uint32_t missed, const SliceMeasure& measure, float lo_theta,
+                        float hi_theta, float h_lo, float to_sector, float u_rot, const V3& view,
+                        const V3& t, float sector_weight, float env_light[3],
+                        float cube[kCubeFaces]) const {
+    constexpr int kMissBins = 8;
+    const float step = (hi_theta - lo_theta) / kMissBins;
     const float cos_step = std::cos(step), sin_step = std::sin(step);
-    std::array<float, kEnvAngles + 1> m, c, s;
-    c[0] = std::cos(lo_theta), s[0] = std::sin(lo_theta);
-    for (int i = 0; i <= kEnvAngles; ++i) {
-      if (i > 0) {
-        c[i] = c[i - 1] * cos_step - s[i - 1] * sin_step;
-        s[i] = s[i - 1] * cos_step + c[i - 1] * sin_step;
-      }
-      m[i] = measure(Angle{lo_theta + static_cast<float>(i) * step, s[i], c[i]});
-    }
-    int i = 0;
-    for (int k = 0; k < kSectors; ++k) {
-      if (!(missed >> k & 1u)) continue;
-      const float target = h_lo + (static_cast<float>(k) + u_rot) / to_sector;
-      while (i < kEnvAngles - 1 && m[i + 1] < target) ++i;  // targets rise with k
-      const float span = m[i + 1] - m[i];
-      const float f = span > 0 ? std::clamp((target - m[i]) / span, 0.0f, 1.0f) : 0.5f;
-      const float dc = (1.0f - f) * c[i] + f * c[i + 1], ds = (1.0f - f) * s[i] + f * s[i + 1];
-      const std::array<float, 3> l = env_radiance(normalized(dc * view + ds * t));
-      for (int ch = 0; ch < 3; ++ch) env_light[ch] += sector_weight * l[ch];
+    const float cos_half = std::cos(0.5f * step), sin_half = std::sin(0.5f * step);
+    // The sectors below coordinate u: bits 0 .. ceil(u) - 1.
+    auto below = [](float u) {
+      const float k = std::min(std::max(std::ceil(u), 0.0f), 32.0f);
+      return k >= 32.0f ? ~0u : (1u << static_cast<std::uint32_t>(k)) - 1u;
+    };
+    float c = std::cos(lo_theta), s = std::sin(lo_theta);
+    std::uint32_t done = below(-u_rot);
+    for (int i = 0; i < kMissBins; ++i) {
+      const float cm = c * cos_half - s * sin_half, sm = s * cos_half + c * sin_half;
+      const float cn = c * cos_step - s * sin_step, sn = s * cos_step + c * sin_step;
+      c = cn, s = sn;
+      const std::uint32_t upto =
+          i + 1 == kMissBins
+              ? ~0u
+              : below((measure(Angle{lo_theta + static_cast<float>(i + 1) * step, s, c}) - h_lo) *
+                          to_sector -
+                      u_rot);
+      const int count = sector_count(missed & upto & ~done);
+      done |= upto;
+      if (count == 0) continue;
+      const V3 d = normalized(cm * view + sm * t);
+      misses.add({d.x, d.y, d.z}, sector_weight * static_cast<float>(count), env_light, cube);
     }
   }
 
   // Traces the slices of trace sample `s` from pixel `p`; appends its hits.
   void trace(int p, std::vector<std::int32_t>* pixels, std::vector<float>* weights, float* miss,
-             float env_light[3]) const {
+             float env_light[3], float cube[kCubeFaces]) const {
     const int x = p % w, y = p / w;
     const float z0 = g.depth.plane(0)[p];
     const V3 n{g.normal.plane(0)[p], g.normal.plane(1)[p], g.normal.plane(2)[p]};
@@ -359,17 +348,9 @@ struct SliceTracer {
       }
       const std::uint32_t missed = ~mask;
       *miss += sector_weight * static_cast<float>(sector_count(missed));
-      if (!env.is_black() && missed) {
-        if (env.is_constant()) {
-          // The same light from every direction: the missed sectors' share of it.
-          const std::array<float, 3> l = env.radiance({0.0f, 0.0f, 1.0f});
-          const float share = sector_weight * static_cast<float>(sector_count(missed));
-          for (int c = 0; c < 3; ++c) env_light[c] += share * l[c];
-        } else {
-          add_sector_env_light(missed, measure, lowest.theta, highest.theta, h_lo, to_sector, u_rot,
-                               view, t, sector_weight, env_light);
-        }
-      }
+      if (missed)
+        add_slice_misses(missed, measure, lowest.theta, highest.theta, h_lo, to_sector, u_rot, view,
+                         t, sector_weight, env_light, cube);
     }
     // Each slice's weight |n_p| x its measure has mean 1 over the slice angles; dividing by the
     // sampled slices' own total makes a pixel's weights sum to 1 exactly (a ratio estimator:
@@ -383,17 +364,19 @@ struct SliceTracer {
     for (int e = 0; e < kept; ++e) weights->push_back(hits.weight[e] * norm);
     *miss *= norm;
     for (int c = 0; c < 3; ++c) env_light[c] *= norm;
+    for (int f = 0; f < kCubeFaces; ++f) cube[f] *= norm;
   }
 };
 
 }  // namespace
 
 WeightedHits trace_slices(const GBuffer& g, const TraceGrid& grid, const GiSettings& settings,
-                          const Environment& env) {
-  const SliceTracer tracer(g, grid, settings, env);
+                          const MissModel& misses) {
+  const SliceTracer tracer(g, grid, settings, misses);
   WeightedHits hits;
   hits.miss = Image(grid.width, grid.height, 1);
   hits.env = Image(grid.width, grid.height, 3);
+  hits.cube = Image(grid.width, grid.height, kCubeFaces);
   // Each row collects its hits apart; joined in row order, so the result is the same for any
   // thread count.
   std::vector<std::vector<std::int32_t>> row_pixels(grid.height);
@@ -409,11 +392,12 @@ WeightedHits trace_slices(const GBuffer& g, const TraceGrid& grid, const GiSetti
       const int p = grid.origin[s];
       if (p < 0) continue;
       const std::size_t before = px.size();
-      float miss = 0, env_light[3] = {0, 0, 0};
-      tracer.trace(p, &px, &wt, &miss, env_light);
+      float miss = 0, env_light[3] = {0, 0, 0}, cube[kCubeFaces] = {0, 0, 0, 0, 0, 0};
+      tracer.trace(p, &px, &wt, &miss, env_light, cube);
       counts[bx] = static_cast<std::uint32_t>(px.size() - before);
       hits.miss.plane(0)[s] = miss;
       for (int c = 0; c < 3; ++c) hits.env.plane(c)[s] = env_light[c];
+      for (int f = 0; f < kCubeFaces; ++f) hits.cube.plane(f)[s] = cube[f];
     }
   });
   std::size_t total = 0;

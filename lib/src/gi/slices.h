@@ -16,8 +16,8 @@
 // this is the march's and the reference's answer on the same surface model.
 #pragma once
 
-#include "environment.h"
 #include "gather.h"
+#include "misses.h"
 #include "ssgi/gbuffer.h"
 #include "ssgi/settings.h"
 
@@ -26,6 +26,6 @@ namespace ssgi::detail {
 // settings.slices slices per trace origin, settings.max_steps samples along each side of each.
 // The result is the same for any thread count.
 WeightedHits trace_slices(const GBuffer& g, const TraceGrid& grid, const GiSettings& settings,
-                          const Environment& env);
+                          const MissModel& misses);
 
 }  // namespace ssgi::detail

@@ -368,65 +368,35 @@ class ReferenceTracer {
   SlabScene scene_;
 };
 
-// The environment radiance a missing ray brings, from its camera-space direction: maps are in
-// world space, so the direction is rotated to it when the camera's world transform is known.
-class MissRadiance {
- public:
-  MissRadiance(const GBuffer& g, const Environment& env)
-      : env_(env), rotate_(g.camera.has_world_transform && !env.is_constant()) {
-    if (rotate_) camera_to_world_ = g.camera.world_to_camera.inverse();
-  }
-  std::array<float, 3> operator()(const Vec3f& d) const {
-    if (!rotate_) return env_.radiance(d);
-    const Vec3d w = camera_to_world_.transform_dir({d.x, d.y, d.z});
-    return env_.radiance(
-        {static_cast<float>(w.x), static_cast<float>(w.y), static_cast<float>(w.z)});
-  }
-
- private:
-  const Environment& env_;
-  bool rotate_;
-  Mat4d camera_to_world_;
-};
-
 // Traces pixel (x, y)'s rays into its slice of `hits`: the march's rays (PixelRays).
 void trace_pixel(const GBuffer& g, const GiSettings& settings, const ReferenceTracer& tracer,
-                 const MissRadiance& miss_radiance, bool black_env, int x, int y, RayHits* hits) {
+                 const MissModel& misses, int x, int y, RayHits* hits) {
   const PixelRays rays(g, settings, x, y);
   const std::size_t pixel = static_cast<std::size_t>(y) * g.width() + x;
   std::int32_t* out = &hits->hit[pixel * hits->rays];
-  float env_sum[3] = {0, 0, 0};
-  int misses = 0;
+  float env[3] = {0, 0, 0}, cube[kCubeFaces] = {0, 0, 0, 0, 0, 0};
+  int missed = 0;
   for (int k = 0; k < hits->rays; ++k) {
     float jitter;  // the march's; Embree needs none
     const Vec3f d = rays.direction(k, &jitter);
     const int hit = tracer.trace(rays.origin(), d, x, y);
     out[k] = hit >= 0 ? mark_hit(g, hit, rays.origin()) : hit;
     if (hit >= 0) continue;
-    ++misses;
-    if (black_env) continue;
-    const auto l = miss_radiance(d);
-    for (int ch = 0; ch < 3; ++ch) env_sum[ch] += l[ch];
+    ++missed;
+    misses.add(d, 1.0f, env, cube);
   }
-  for (int ch = 0; ch < 3; ++ch) hits->env_sum.plane(ch)[pixel] = env_sum[ch];
-  hits->miss_count.plane(0)[pixel] = static_cast<float>(misses);
+  hits->store_misses(pixel, missed, env, cube);
 }
 
 }  // namespace
 
-RayHits trace_reference(const GBuffer& g, const GiSettings& settings, const Environment& env) {
+RayHits trace_reference(const GBuffer& g, const GiSettings& settings, const MissModel& misses) {
   const ReferenceTracer tracer(g, settings, SurfaceModel{static_cast<float>(settings.thickness)});
-  const MissRadiance miss_radiance(g, env);
   const int w = g.width(), h = g.height();
-  RayHits hits;
-  hits.rays = settings.rays;
-  hits.hit.assign(static_cast<std::size_t>(w) * h * settings.rays, -1);
-  hits.env_sum = Image(w, h, 3);
-  hits.miss_count = Image(w, h, 1);
+  RayHits hits(g, settings.rays);
   parallel_for_rows(h, [&](int y) {
     for (int x = 0; x < w; ++x)
-      if (g.is_surface(x, y))
-        trace_pixel(g, settings, tracer, miss_radiance, env.is_black(), x, y, &hits);
+      if (g.is_surface(x, y)) trace_pixel(g, settings, tracer, misses, x, y, &hits);
   });
   return hits;
 }

@@ -24,12 +24,12 @@
 namespace ssgi::detail {
 
 // Traces settings.rays rays per surface pixel with Embree and records, like march_screen_space,
-// the pixel whose light each ray brings or a miss (with the environment it saw). The rays are
+// the pixel whose light each ray brings or a miss (with what `misses` gives it). The rays are
 // the march's: the same origins and the same cosine-weighted directions from the pixel's
-// rotated R2 set (directions.h), so ray k of the reference is ray k of the march. Misses see the
-// environment; MissMode::kExtend has no meaning here (there is no screen edge beyond which to
-// extend a surface), so its misses see the environment as with kEnvironment. The result is the
+// rotated R2 set (directions.h), so ray k of the reference is ray k of the march. MissMode::kExtend
+// has no meaning here (there is no screen edge beyond which to extend a surface): its model sends
+// every miss to the environment, as with kEnvironment. The result is the
 // same for any thread count. Throws Error(kInternal) when Embree fails.
-RayHits trace_reference(const GBuffer& g, const GiSettings& settings, const Environment& env);
+RayHits trace_reference(const GBuffer& g, const GiSettings& settings, const MissModel& misses);
 
 }  // namespace ssgi::detail
