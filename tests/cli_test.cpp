@@ -2400,6 +2400,20 @@ TEST_F(Cli, ColourOptionsAreCheckedAndDecideWhatSkipExistingKeeps) {
             std::string::npos)
       << remade.err;
   EXPECT_EQ(read_exr(out).spec.get_string_attribute("ssgi:colorspace"), "ACEScg");
+  // OIIO calls every EXR "Linear": said under -v, taken as scene-linear, not an error.
+  EXPECT_NE(remade.err.find("the input says 'Linear', which the config does not know: taken as "
+                            "scene-linear"),
+            std::string::npos)
+      << remade.err;
+  // $OCIO stands for --colorconfig.
+  ::setenv("OCIO", kOcioConfig.c_str(), 1);
+  const CliResult from_env = run_ssgi({"run", in, "-o", path("env.0001.exr"), "-q",
+                                       "--output-colorspace", "ACEScg", "--temporal", "none"});
+  ::unsetenv("OCIO");
+  ASSERT_EQ(from_env.exit_code, 0) << from_env.err;
+  const ExrImage env = read_exr(path("env.0001.exr"));
+  EXPECT_EQ(env.spec.get_string_attribute("ssgi:colorspace"), "ACEScg");
+  EXPECT_EQ(env.planes.at("indirect.R"), read_exr(out).planes.at("indirect.R"));
 }
 
 TEST_F(Cli, PreviewIsTheCompositeThroughTheDisplayPerFrame) {
@@ -2470,6 +2484,56 @@ TEST_F(Cli, PreviewSheetShowsEachFramesPassesAndTheDifference) {
   expect_usage_error(run_ssgi({"preview", in, "-o", path("sheet.jpg")}), "preview",
                      "output '" + path("sheet.jpg") + "' must end in .png: the sheet is a PNG");
   EXPECT_FALSE(fs::exists(path("sheet.jpg")));
+}
+
+TEST_F(Cli, AnEnvironmentMapGoesThroughTheConfigsSpaces) {
+  // The lone plane sees only the environment, a constant map. Through the config, an 8-bit
+  // map is decoded from its sRGB space (the same curve as without one); --env-colorspace raw
+  // takes its values as they are; an ACEScg EXR map converts to lin_rec709 by the matrix.
+  OIIO::ImageBuf png(OIIO::ImageSpec(64, 32, 3, OIIO::TypeDesc::UINT8));
+  OIIO::ImageBufAlgo::fill(png, {128 / 255.0f, 128 / 255.0f, 128 / 255.0f});
+  ASSERT_TRUE(png.write(path("env.png"))) << png.geterror();
+  OIIO::ImageBuf exr(OIIO::ImageSpec(64, 32, 3, OIIO::TypeDesc::FLOAT));
+  const float color[3] = {0.2f, 0.1f, 0.05f};
+  OIIO::ImageBufAlgo::fill(exr, color);
+  ASSERT_TRUE(exr.write(path("env.exr"))) << exr.geterror();
+  const auto mean_indirect = [&](const std::string& env, std::vector<std::string> extra) {
+    const std::string out = path("o.0001.exr");
+    std::vector<std::string> args = {"run",      testdata("plane/plane.0001.exr"),
+                                     "-o",       out,
+                                     "-q",       "--env",
+                                     path(env),  "--miss",
+                                     "env",      "--colorconfig",
+                                     kOcioConfig};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const CliResult r = run_ssgi(args);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    std::array<double, 3> mean{};
+    const ExrImage image = read_exr(out);
+    for (int c = 0; c < 3; ++c) {
+      for (float v : image.planes.at(std::string("indirect.") + "RGB"[c])) mean[c] += v;
+      mean[c] /= image.planes.at("indirect.R").size();
+    }
+    return mean;
+  };
+  const std::array<double, 3> srgb = mean_indirect("env.png", {});
+  const std::array<double, 3> raw = mean_indirect("env.png", {"--env-colorspace", "raw"});
+  const std::array<double, 3> linear = mean_indirect("env.exr", {});
+  const std::array<double, 3> ap1 = mean_indirect("env.exr", {"--env-colorspace", "ACEScg"});
+  // sRGB 128 is light 0.2158605; 0.502 as data; the EXR's green 0.1 as it is. The light is
+  // proportional to the map's value in each channel.
+  const double decoded = std::pow((128.0 / 255 + 0.055) / 1.055, 2.4);
+  EXPECT_GT(linear[1], 0.005);
+  EXPECT_NEAR(srgb[1] / linear[1], decoded / color[1], 1e-3);
+  EXPECT_NEAR(raw[1] / linear[1], (128.0 / 255) / color[1], 1e-3);
+  // Read as ACEScg, each channel scales as ocioconvert converts the map's colour.
+  ASSERT_EQ(ocioconvert(path("env.exr"), "ACEScg", path("env_rec709.exr"), "lin_rec709"), 0);
+  const ExrImage converted = read_exr(path("env_rec709.exr"));
+  for (int c = 0; c < 3; ++c) {
+    const double want = converted.planes.at(std::string(1, "RGB"[c]))[0] / color[c];
+    EXPECT_NEAR(ap1[c] / linear[c], want, 1e-3 * want) << c;
+  }
+  EXPECT_GT(ap1[0] / linear[0], 1.2);  // AP1 red is redder than Rec.709's
 }
 
 }  // namespace
