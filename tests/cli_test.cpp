@@ -2536,4 +2536,47 @@ TEST_F(Cli, AnEnvironmentMapGoesThroughTheConfigsSpaces) {
   EXPECT_GT(ap1[0] / linear[0], 1.2);  // AP1 red is redder than Rec.709's
 }
 
+TEST_F(Cli, PreviewGoesThroughTheConfigsDisplayAndView) {
+  const std::string in = testdata("sample/sample.0001.exr");
+  const auto preview = [&](const std::string& name, std::vector<std::string> extra) {
+    std::vector<std::string> args = {
+        "run", in, "-o", path(name + ".0001.exr"), "-q", "--preview", path(name + ".0001.png")};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const CliResult r = run_ssgi(args);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    OIIO::ImageBuf png(path(name + ".0001.png"));
+    EXPECT_TRUE(png.read()) << png.geterror();
+    return png;
+  };
+  const OIIO::ImageBuf plain = preview("plain", {});
+  const OIIO::ImageBuf standard = preview("standard", {"--colorconfig", kOcioConfig});
+  const OIIO::ImageBuf raw = preview("raw", {"--colorconfig", kOcioConfig, "--view", "Raw"});
+  // The config's sRGB / Standard view is the sRGB curve: the built-in one's picture, to the
+  // 8-bit step where float rounding crosses one.
+  const auto standard_diff = OIIO::ImageBufAlgo::compare(standard, plain, 1.01 / 255, 0);
+  EXPECT_LE(standard_diff.maxerror, 1.01 / 255);
+  // The Raw view shows the composite's values clamped to [0, 1], not encoded: darker.
+  const ExrImage exr = read_exr(path("raw.0001.exr"));
+  double worst = 0;
+  for (int y = 0; y < exr.spec.height; ++y)
+    for (int x = 0; x < exr.spec.width; ++x) {
+      float p[3];
+      raw.getpixel(x, y, p, 3);
+      for (int c = 0; c < 3; ++c) {
+        const float v = exr.planes.at(std::string(1, "RGB"[c]))[y * exr.spec.width + x];
+        worst = std::max(worst, std::abs(double(p[c]) - std::clamp(v, 0.0f, 1.0f)));
+      }
+    }
+  EXPECT_LE(worst, 0.5 / 255 + 1e-6);
+  const auto stats_raw = OIIO::ImageBufAlgo::computePixelStats(raw);
+  const auto stats_plain = OIIO::ImageBufAlgo::computePixelStats(plain);
+  EXPECT_LT(stats_raw.avg[1], 0.8 * stats_plain.avg[1]);
+  const CliResult bad =
+      run_ssgi({"run", in, "-o", path("x.0001.exr"), "--preview", path("x.0001.png"),
+                "--colorconfig", kOcioConfig, "--view", "Filmic"});
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("has no view 'Filmic'"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(path("x.0001.exr")));
+}
+
 }  // namespace
