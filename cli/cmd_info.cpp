@@ -7,6 +7,7 @@
 
 #include "commands.h"
 #include "run_options.h"
+#include "ssgi/color.h"
 #include "ssgi/io.h"
 #include "ssgi/layout.h"
 #include "ssgi/pipeline.h"
@@ -214,6 +215,9 @@ int run_info(int argc, char** argv) {
   r.settings = ssgi::describe_settings(o.run.gi);
   try {
     r.plan = ssgi::make_plan(seq, o.run.gi);
+    // What the run's colour management would decide (the config is loaded, nothing converted).
+    const ssgi::ColorManagement color = ssgi::color_management_for(o.run.gi.color, seq);
+    for (const std::string& reason : color.reasons()) r.plan->reasons.push_back(reason);
   } catch (const ssgi::Error& e) {
     if (e.kind() == ssgi::ErrorKind::kUsage) throw;
     r.problem = e;

@@ -37,5 +37,6 @@ int run_info(int argc, char** argv);
 int run_compare(int argc, char** argv);
 int run_reference(int argc, char** argv);
 int run_sweep(int argc, char** argv);
+int run_preview(int argc, char** argv);
 
 }  // namespace ssgi_cli

@@ -124,6 +124,11 @@ void Canvas::vertical_text(int x, int y, const std::string& text, int size, Rgb 
   }
 }
 
+void Canvas::paste(int x, int y, const OIIO::ImageBuf& picture) {
+  if (!IBA::paste(image_, x, y, 0, 0, picture))
+    ssgi::throw_io("", "cannot draw a picture: " + image_.geterror());
+}
+
 TextExtent Canvas::measure(const std::string& text, int size) const {
   const OIIO::ROI roi = IBA::text_size(text, size, font_path_);
   if (!roi.defined()) ssgi::throw_io(font_path_, "cannot measure text with this font");

@@ -49,6 +49,8 @@ class Canvas {
             Align align_x = Align::kStart, Align align_y = Align::kStart);
   // Text reading from bottom to top (an axis title), centred on (x, y).
   void vertical_text(int x, int y, const std::string& text, int size, Rgb color);
+  // Copies the RGB image `picture` (display values in [0, 1]) with its top left corner at (x, y).
+  void paste(int x, int y, const OIIO::ImageBuf& picture);
   // What text() would cover.
   TextExtent measure(const std::string& text, int size) const;
 

@@ -29,6 +29,8 @@ const Subcommand kSubcommands[] = {
      ssgi_cli::run_reference},
     {"sweep", "time every preset on a shot against its error: a table and a plot",
      ssgi_cli::run_sweep},
+    {"preview", "a labelled sheet of the passes of chosen frames: direct, indirect, gi, composite",
+     ssgi_cli::run_preview},
 };
 
 void print_usage(std::FILE* out) {

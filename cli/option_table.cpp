@@ -12,9 +12,15 @@ namespace {
 
 namespace Strutil = OIIO::Strutil;
 
-constexpr unsigned kPlanning = kRunCommand | kInfoCommand | kReferenceCommand;
+// The options that say how frames are lit: run, info and reference, and preview (which lights
+// the frames it shows).
+constexpr unsigned kPlanning = kRunCommand | kInfoCommand | kReferenceCommand | kPreviewCommand;
 // The options that say what the input is, and the general ones: sweep takes these too.
 constexpr unsigned kReading = kPlanning | kSweepCommand;
+// The tracing settings and presets: run, info and preview.
+constexpr unsigned kTracing = kRunCommand | kInfoCommand | kPreviewCommand;
+// The options of the EXR frames written: run and reference.
+constexpr unsigned kWriting = kRunCommand | kInfoCommand | kReferenceCommand;
 
 // A number as the help prints it: the shortest form that reads back as the same value.
 std::string number(double v) {
@@ -72,27 +78,26 @@ const std::vector<OptionSpec> kTable = {
     {kCamera, "camera", 0, "FILE.json", OptionGroup::kInput, kReading,
      "per-frame cameras from a sidecar file", nullptr},
     // gi
-    {kPreset, "preset", 0, "P", OptionGroup::kGi, kRunCommand | kInfoCommand,
+    {kPreset, "preset", 0, "P", OptionGroup::kGi, kTracing,
      "draft, default or final: the tracing settings below (man ssgi, PRESETS); options given "
      "override it",
      [](const RunOptions&) { return std::string("default"); }},
-    {kTracer, "tracer", 0, "T", OptionGroup::kGi, kRunCommand | kInfoCommand, "slices or march",
+    {kTracer, "tracer", 0, "T", OptionGroup::kGi, kTracing, "slices or march",
      [](const RunOptions& d) { return std::string(tracer_name(d.gi.tracer)); }},
-    {kSlices, "slices", 0, "N", OptionGroup::kGi, kRunCommand | kInfoCommand,
+    {kSlices, "slices", 0, "N", OptionGroup::kGi, kTracing,
      "slices per traced pixel, 32 directions each",
      [](const RunOptions& d) { return std::to_string(d.gi.slices); }},
-    {kTraceScale, "trace-scale", 0, "N", OptionGroup::kGi, kRunCommand | kInfoCommand,
+    {kTraceScale, "trace-scale", 0, "N", OptionGroup::kGi, kTracing,
      "trace one pixel in NxN: 1, 2, 4, 8 or auto (the largest keeping the preset's trace grid "
      "width across)",
      [](const RunOptions& d) {
        return d.gi.trace_scale == 0 ? "auto, " + std::to_string(d.gi.trace_width) + " across"
                                     : std::to_string(d.gi.trace_scale);
      }},
-    {kMaxSteps, "max-steps", 0, "N", OptionGroup::kGi, kRunCommand | kInfoCommand,
+    {kMaxSteps, "max-steps", 0, "N", OptionGroup::kGi, kTracing,
      "samples per slice side or per march ray",
      [](const RunOptions& d) { return std::to_string(d.gi.max_steps); }},
-    {kRays, "rays", 0, "N", OptionGroup::kGi, kRunCommand | kInfoCommand,
-     "--tracer march: rays per pixel and bounce",
+    {kRays, "rays", 0, "N", OptionGroup::kGi, kTracing, "--tracer march: rays per pixel and bounce",
      [](const RunOptions& d) { return std::to_string(d.gi.rays); }},
     {kSpp, "spp", 0, "N", OptionGroup::kGi, kReferenceCommand,
      "rays per pixel and bounce, 1 to 4096",
@@ -153,18 +158,45 @@ const std::vector<OptionSpec> kTable = {
      [](const RunOptions& d) { return temporal_text(d.gi); }},
     {kSeed, "seed", 0, "N", OptionGroup::kGi, kPlanning, "noise seed",
      [](const RunOptions& d) { return std::to_string(d.gi.seed); }},
+    // colour
+    {kColorConfig, "colorconfig", 0, "FILE", OptionGroup::kColor, kPlanning,
+     "the OpenColorIO config (default: $OCIO, else none: no transform runs on EXR data)", nullptr},
+    {kInputColorspace, "input-colorspace", 0, "NAME", OptionGroup::kColor, kPlanning,
+     "the space of the light and albedo passes read (default: the working space; data passes "
+     "are never transformed)",
+     nullptr},
+    {kOutputColorspace, "output-colorspace", 0, "NAME", OptionGroup::kColor, kWriting,
+     "the space of ssgi's layers written (default: the working space; passed-through layers "
+     "keep theirs)",
+     nullptr},
+    {kEnvColorspace, "env-colorspace", 0, "NAME", OptionGroup::kColor, kPlanning,
+     "the environment map's space (default: sRGB for an 8- or 16-bit map, else the working "
+     "space)",
+     nullptr},
+    {kWorkingSpace, "working-space", 0, "NAME", OptionGroup::kColor, kPlanning,
+     "the space the GI arithmetic runs in (default: the config's scene_linear role)", nullptr},
+    {kDisplay, "display", 0, "NAME", OptionGroup::kColor, kRunCommand | kPreviewCommand,
+     "the preview's OCIO display (default: the config's default display; sRGB without a "
+     "config)",
+     nullptr},
+    {kView, "view", 0, "NAME", OptionGroup::kColor, kRunCommand | kPreviewCommand,
+     "the preview's view of that display (default: the display's default view)", nullptr},
     // output
-    {'o', "output", 'o', "PATTERN", OptionGroup::kOutput, kPlanning,
+    {kPreview, "preview", 0, "PATTERN", OptionGroup::kOutput, kRunCommand,
+     "also write each frame's composite as a display-referred picture, e.g. prev.####.png "
+     "(.png, .jpg)",
+     nullptr},
+    {'o', "output", 'o', "PATTERN", OptionGroup::kOutput, kWriting,
      "output sequence, e.g. out/shot.####.exr", nullptr},
-    {kCompression, "compression", 0, "C", OptionGroup::kOutput, kPlanning,
+    {kCompression, "compression", 0, "C", OptionGroup::kOutput, kWriting,
      "zip, zips, piz, rle, pxr24, b44, b44a, dwaa[:L], dwab[:L] or none",
      [](const RunOptions& d) { return d.write.compression; }},
-    {kDatatype, "datatype", 0, "T", OptionGroup::kOutput, kPlanning,
+    {kDatatype, "datatype", 0, "T", OptionGroup::kOutput, kWriting,
      "half or float for ssgi's channels",
      [](const RunOptions& d) { return std::string(d.write.half ? "half" : "float"); }},
-    {kNoPassthrough, "no-passthrough", 0, nullptr, OptionGroup::kOutput, kPlanning,
+    {kNoPassthrough, "no-passthrough", 0, nullptr, OptionGroup::kOutput, kWriting,
      "do not copy the input's channels", nullptr},
-    {kLayerPrefix, "layer-prefix", 0, "P", OptionGroup::kOutput, kPlanning,
+    {kLayerPrefix, "layer-prefix", 0, "P", OptionGroup::kOutput, kWriting,
      "write ssgi's channels under P. (e.g. ssgi.indirect.R)", nullptr},
     {kStats, "stats", 0, "FILE.json", OptionGroup::kOutput, kRunCommand | kReferenceCommand,
      "per-frame read_ms, gi_ms, write_ms, the settings and the run's summary", nullptr},
@@ -192,6 +224,12 @@ const std::vector<OptionSpec> kTable = {
     {kRepeat, "repeat", 0, "N", OptionGroup::kGi, kSweepCommand,
      "time each run N times, round by round; ms per frame is the fastest round's mean gi_ms",
      [](const RunOptions&) { return std::string("1"); }},
+    {kTruth, "truth", 0, "LAYER", OptionGroup::kGi, kPreviewCommand,
+     "also show the difference to this R,G,B layer of the input (e.g. ViewLayer.DiffInd)", nullptr},
+    {kReference, "reference", 0, "PATTERN", OptionGroup::kGi, kPreviewCommand,
+     "also show the difference to the indirect layer of this sequence (ssgi reference's)", nullptr},
+    {'o', "output", 'o', "FILE.png", OptionGroup::kOutput, kPreviewCommand,
+     "the sheet: one row per frame, one column per pass", nullptr},
     {'o', "output", 'o', "FILE.csv", OptionGroup::kOutput, kSweepCommand,
      "the table: one row per run", nullptr},
     {kSweepJson, "json", 0, "FILE", OptionGroup::kOutput, kSweepCommand,
@@ -231,6 +269,8 @@ const char* group_name(OptionGroup g) {
       return "input";
     case OptionGroup::kGi:
       return "gi";
+    case OptionGroup::kColor:
+      return "colour";
     case OptionGroup::kOutput:
       return "output";
     case OptionGroup::kGeneral:
@@ -250,7 +290,8 @@ std::string written_name(const std::string& written) {
 // The subcommands of `mask`, as "ssgi run or ssgi info".
 std::string subcommands_text(unsigned mask) {
   std::vector<std::string> names;
-  for (Subcommand s : {kRunCommand, kInfoCommand, kReferenceCommand, kSweepCommand})
+  for (Subcommand s :
+       {kRunCommand, kInfoCommand, kReferenceCommand, kSweepCommand, kPreviewCommand})
     if (mask & s) names.push_back(std::string("ssgi ") + subcommand_name(s));
   return Strutil::join(names, " or ");
 }
@@ -267,6 +308,8 @@ const char* subcommand_name(Subcommand s) {
       return "reference";
     case kSweepCommand:
       return "sweep";
+    case kPreviewCommand:
+      return "preview";
   }
   return "";
 }
@@ -310,8 +353,8 @@ std::string options_help(Subcommand s) {
   const ssgi::RunOptions defaults = subcommand_defaults(s);
   constexpr int kColumn = 24, kWidth = 79;
   std::string out;
-  for (OptionGroup g :
-       {OptionGroup::kInput, OptionGroup::kGi, OptionGroup::kOutput, OptionGroup::kGeneral}) {
+  for (OptionGroup g : {OptionGroup::kInput, OptionGroup::kGi, OptionGroup::kColor,
+                        OptionGroup::kOutput, OptionGroup::kGeneral}) {
     std::string lines;
     for (const OptionSpec& o : kTable) {
       if (o.group != g || !(o.subcommands & s)) continue;

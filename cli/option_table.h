@@ -1,7 +1,7 @@
-// The options of ssgi run, info, reference and sweep in one table: name, argument, help, default
-// and which subcommands take each. It drives getopt_long (each subcommand registers only its own
-// options), the --help text (defaults read from the code's own defaults, not written out), the
-// errors for unknown, ambiguous and misplaced options, and man/ssgi.1's check.
+// The options of ssgi run, info, reference, sweep and preview in one table: name, argument, help,
+// default and which subcommands take each. It drives getopt_long (each subcommand registers only
+// its own options), the --help text (defaults read from the code's own defaults, not written out),
+// the errors for unknown, ambiguous and misplaced options, and man/ssgi.1's check.
 #pragma once
 
 #include <getopt.h>
@@ -18,6 +18,7 @@ enum Subcommand : unsigned {
   kInfoCommand = 2u,
   kReferenceCommand = 4u,
   kSweepCommand = 8u,
+  kPreviewCommand = 16u,
 };
 
 // The subcommand's name as the user types it ("run").
@@ -77,9 +78,18 @@ enum OptionId : int {
   kPlot,
   kReferenceSpp,
   kRepeat,
+  kColorConfig,
+  kInputColorspace,
+  kOutputColorspace,
+  kEnvColorspace,
+  kWorkingSpace,
+  kDisplay,
+  kView,
+  kPreview,
+  kReference,
 };
 
-enum class OptionGroup { kInput, kGi, kOutput, kGeneral };
+enum class OptionGroup { kInput, kGi, kColor, kOutput, kGeneral };
 
 struct OptionSpec {
   int id;            // what getopt_long returns: an OptionId or the short letter

@@ -68,6 +68,13 @@ void parse_temporal(const char* text, ssgi::GiSettings* gi) {
   }
 }
 
+// "--name" of an option id, for messages.
+std::string written_name(int id) {
+  for (const OptionSpec& spec : option_table())
+    if (spec.id == id) return std::string("--") + spec.name;
+  return "?";
+}
+
 }  // namespace
 
 CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool need_output) {
@@ -96,7 +103,7 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
     given.emplace_back(c, optarg ? optarg : "");
     if (c == kPreset) o.preset = optarg;
   }
-  if (sub & (kRunCommand | kInfoCommand)) ssgi::apply_preset(o.preset, &gi);
+  if (sub & (kRunCommand | kInfoCommand | kPreviewCommand)) ssgi::apply_preset(o.preset, &gi);
   bool env_color_given = false;
   for (const auto& [id, value] : given) {
     const char* a = value.c_str();
@@ -318,6 +325,34 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
       case kReferenceSpp:
         o.reference_spp = static_cast<int>(parse_long("reference-spp", a, 1, 4096));
         break;
+      case kColorConfig:
+      case kInputColorspace:
+      case kOutputColorspace:
+      case kEnvColorspace:
+      case kWorkingSpace:
+      case kDisplay:
+      case kView: {
+        ssgi::ColorSettings& c = gi.color;
+        std::string* field = id == kColorConfig        ? &c.config
+                             : id == kInputColorspace  ? &c.input
+                             : id == kOutputColorspace ? &c.output
+                             : id == kEnvColorspace    ? &c.env
+                             : id == kWorkingSpace     ? &c.working
+                             : id == kDisplay          ? &c.display
+                                                       : &c.view;
+        if (*a == '\0')
+          ssgi::throw_usage(std::string("option '") + written_name(id) + "' needs a value");
+        *field = a;
+        break;
+      }
+      case kPreview:
+        if (*a == '\0') ssgi::throw_usage("--preview needs a file name pattern");
+        o.run.preview = a;
+        break;
+      case kReference:
+        if (*a == '\0') ssgi::throw_usage("--reference needs a sequence");
+        o.reference = a;
+        break;
       case kRepeat:
         o.repeat = static_cast<int>(parse_long("repeat", a, 1, 100));
         break;
@@ -353,8 +388,9 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
     ssgi::throw_usage(std::string("unexpected argument '") + argv[optind + 1] + "'");
   in.pattern = argv[optind];
   if (need_output && o.run.output.empty())
-    ssgi::throw_usage(sub == kSweepCommand ? "no output given (-o FILE.csv)"
-                                           : "no output given (-o PATTERN)");
+    ssgi::throw_usage(sub == kSweepCommand     ? "no output given (-o FILE.csv)"
+                      : sub == kPreviewCommand ? "no output given (-o FILE.png)"
+                                               : "no output given (-o PATTERN)");
   if (sub == kSweepCommand && o.presets.empty() && !o.grid)
     ssgi::throw_usage("nothing to run: --presets is empty and --grid is not given");
   if (!gi.env_map.empty() && env_color_given)

@@ -1,5 +1,5 @@
-// The options of `ssgi run`, `ssgi info`, `ssgi reference` and `ssgi sweep`, parsed with
-// getopt_long from option_table.h.
+// The options of `ssgi run`, `ssgi info`, `ssgi reference`, `ssgi sweep` and `ssgi preview`, parsed
+// with getopt_long from option_table.h.
 #pragma once
 
 #include <functional>
@@ -32,6 +32,8 @@ struct CommonOptions {
   std::string plot;                                         // --plot FILE.png
   int reference_spp = 256;                                  // --reference-spp
   int repeat = 1;                                           // --repeat
+  // ssgi preview (its sheet goes to run.output, -o; --truth above)
+  std::string reference;  // --reference PATTERN
 };
 
 // Parses argv (argv[0] is the subcommand) over subcommand_defaults(sub), with the options

@@ -7,12 +7,15 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "fixture_frame.h"
 #include "gtest/gtest.h"
+#include "ssgi/color.h"
 #include "ssgi/io.h"
 
 namespace ssgi {
@@ -470,6 +473,38 @@ TEST(Pipeline, AHitFromBehindBringsTheBackNotTheLitFront) {
                 tracer == Tracer::kReference ? "reference" : tracer_name(tracer), gain, back);
     EXPECT_GT(back, 0.005);
   }
+}
+
+// Read through an ACEScg -> lin_rec709 transform, the colour passes change and the data passes
+// (depth, normals, motion) keep every bit.
+TEST(Pipeline, ColourTransformsTouchLightAndAlbedoOnly) {
+  InputOptions in;
+  in.pattern = std::string(SSGI_TESTDATA_DIR) + "/moving/moving.0002.exr";
+  const SequenceInfo seq = open_sequence(in);
+  GiSettings s;
+  const RoleMask roles = make_plan(seq, s).roles;
+  ASSERT_TRUE(roles & role_bit(Role::kMotion));
+  ColorSettings c;
+  c.config = std::string(SSGI_TESTDATA_DIR) + "/ocio/config.ocio";
+  c.input = "ACEScg";
+  const ColorManagement color(c);
+  EXPECT_EQ(color.working_space(), "lin_rec709");
+  const GBuffer plain = read_gbuffer(seq, 2, roles, in);
+  const GBuffer converted = read_gbuffer(seq, 2, roles, in, &color);
+  for (const auto& [name, a, b] :
+       {std::tuple{"depth", &plain.depth, &converted.depth},
+        std::tuple{"normal", &plain.normal, &converted.normal},
+        std::tuple{"motion_prev", &plain.motion_prev, &converted.motion_prev}}) {
+    ASSERT_FALSE(a->empty()) << name;
+    ASSERT_EQ(a->data().size(), b->data().size()) << name;
+    EXPECT_EQ(std::memcmp(a->data().data(), b->data().data(), a->bytes()), 0) << name;
+  }
+  // ACEScg (1, 0, 0) is lin_rec709 (1.705, -0.130, -0.024): red albedo gets redder.
+  double changed = 0;
+  for (std::size_t i = 0; i < plain.albedo.data().size(); ++i)
+    changed =
+        std::max(changed, double(std::abs(plain.albedo.data()[i] - converted.albedo.data()[i])));
+  EXPECT_GT(changed, 0.01);
 }
 
 }  // namespace

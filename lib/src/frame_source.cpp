@@ -36,7 +36,7 @@ FrameSource::FrameSource(const SequenceInfo& sequence, const InputOptions& optio
 
 GBuffer FrameSource::read(int frame) const {
   const StopWatch watch(&read_ms_);
-  return read_gbuffer(seq_, frame, pipeline_.plan().roles, options_);
+  return read_gbuffer(seq_, frame, pipeline_.plan().roles, options_, &pipeline_.color());
 }
 
 FrameSource::Lit FrameSource::light(int frame) const {

@@ -173,6 +173,7 @@ Plan make_plan(const SequenceInfo& seq, const GiSettings& s) {
 struct Pipeline::Impl {
   GiSettings settings;
   Plan plan;
+  ColorManagement color;
   detail::Environment env;
 
   // Tracing, misses and bounces on the trace grid: the light before the denoiser, and, when
@@ -184,15 +185,18 @@ Pipeline::Pipeline(const SequenceInfo& seq, const GiSettings& settings)
     : impl_(std::make_unique<Impl>()) {
   impl_->settings = settings;
   impl_->plan = make_plan(seq, settings);
-  impl_->env = settings.env_map.empty()
-                   ? detail::Environment(settings.env_color)
-                   : detail::Environment::from_file(settings.env_map, settings.env_up);
+  impl_->color = color_management_for(settings.color, seq);
+  for (const std::string& reason : impl_->color.reasons()) impl_->plan.reasons.push_back(reason);
+  impl_->env = settings.env_map.empty() ? detail::Environment(settings.env_color)
+                                        : detail::Environment::from_file(
+                                              settings.env_map, settings.env_up, impl_->color);
 }
 
 Pipeline::~Pipeline() = default;
 
 const Plan& Pipeline::plan() const { return impl_->plan; }
 const GiSettings& Pipeline::settings() const { return impl_->settings; }
+const ColorManagement& Pipeline::color() const { return impl_->color; }
 
 namespace {
 

@@ -10,6 +10,7 @@
 #include <set>
 
 #include "frame_source.h"
+#include "preview.h"
 #include "ssgi/log.h"
 #include "ssgi/pipeline.h"
 #include "ssgi/settings.h"
@@ -27,14 +28,17 @@ std::string resolved(const std::string& path) {
   return ec ? fs::absolute(path).lexically_normal().string() : p.string();
 }
 
-void check_outputs(const SequenceInfo& seq, const SequencePattern& out,
-                   const std::string& out_spec) {
+// `what` is "output" or "--preview".
+void check_outputs(const SequenceInfo& seq, const SequencePattern& out, const std::string& out_spec,
+                   const std::string& what) {
   if (!out.has_frame_field && seq.frames.size() > 1)
-    throw_usage("output '" + out_spec + "' has no frame field (e.g. ####) but " +
+    throw_usage(what + " '" + out_spec + "' has no frame field (e.g. ####) but " +
                 std::to_string(seq.frames.size()) + " frames are to be written");
   std::string extension = fs::path(out_spec).extension().string();
   for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  if (extension != ".exr")
+  if (what == "--preview")
+    detail::check_preview_pattern(out_spec);
+  else if (extension != ".exr")
     throw_usage("output '" + out_spec + "' must end in .exr: ssgi writes OpenEXR");
   // Each path resolved once (a shot has thousands of frames), then looked up.
   std::map<std::string, int> inputs;
@@ -93,14 +97,21 @@ int RunReport::skipped() const {
 
 RunReport run_sequence(const RunOptions& options, const RunCallbacks& callbacks) {
   const SequenceInfo seq = open_sequence(options.input);
-  std::vector<int> frames_in_output;
-  const SequencePattern out = parse_sequence_pattern(options.output, &frames_in_output);
-  // The frames to write come from the input; a range in the output name would be ignored.
-  if (!frames_in_output.empty())
-    throw_usage("output '" + options.output +
-                "' names frames: give the frames with the input pattern or --frames, and the "
-                "output as e.g. out/shot.####.exr");
-  check_outputs(seq, out, options.output);
+  // The frames to write come from the input; a range in an output name would be ignored.
+  const auto output_pattern = [&seq](const std::string& spec, const std::string& what) {
+    if (spec.empty()) return SequencePattern();
+    std::vector<int> frames_in_output;
+    const SequencePattern pattern = parse_sequence_pattern(spec, &frames_in_output);
+    if (!frames_in_output.empty())
+      throw_usage(what + " '" + spec +
+                  "' names frames: give the frames with the input pattern or --frames, and the "
+                  "output as e.g. out/shot.####.exr");
+    check_outputs(seq, pattern, spec, what);
+    return pattern;
+  };
+  const SequencePattern out = output_pattern(options.output, "output");
+  const SequencePattern preview = output_pattern(options.preview, "--preview");
+  const bool write_exr = !options.output.empty(), write_preview = !options.preview.empty();
   const Pipeline pipeline(seq, options.gi);
   const Plan& plan = pipeline.plan();
   for (const std::string& reason : plan.reasons) log_info("plan: " + reason);
@@ -111,6 +122,11 @@ RunReport run_sequence(const RunOptions& options, const RunCallbacks& callbacks)
   WriteOptions write = options.write;
   write.provenance.insert(write.provenance.end(), made_by.begin(), made_by.end());
   write.provenance.emplace_back("ssgi:seed", std::to_string(options.gi.seed));
+  // OIIO 2.4 neither writes oiio:ColorSpace to an EXR nor reads one back (it says "Linear"),
+  // and OCIO 2.1 cannot name a space's primaries for the chromaticities attribute: ssgi's own
+  // layers say their space by the config's name in an attribute of ours.
+  write.provenance.emplace_back("ssgi:colorspace", pipeline.color().output_space());
+  const auto preview_made_by = detail::preview_attributes(made_by, pipeline.color());
 
   // Which outputs are there already: reused (--skip-existing), or refused (--no-clobber) before
   // anything is computed.
@@ -119,18 +135,33 @@ RunReport run_sequence(const RunOptions& options, const RunCallbacks& callbacks)
   if (options.skip_existing || options.no_clobber) {
     std::vector<std::string> in_the_way;
     for (int i = 0; i < total; ++i) {
-      const std::string path = out.path_for(seq.frames[i]);
-      std::error_code ec;
-      if (!fs::exists(fs::symlink_status(path, ec))) continue;
-      if (options.skip_existing) {
-        const std::string why_not = why_not_reusable(path, made_by);
-        if (why_not.empty()) {
-          reuse[i] = 1;
+      // A frame is reused when every file it makes (the EXR, the preview) is.
+      bool reusable = options.skip_existing;
+      bool any = false;
+      for (const bool exr : {true, false}) {
+        if (!(exr ? write_exr : write_preview)) continue;
+        const std::string path = (exr ? out : preview).path_for(seq.frames[i]);
+        std::error_code ec;
+        if (!fs::exists(fs::symlink_status(path, ec))) {
+          reusable = false;
           continue;
         }
-        log_info(path + ": exists but is made again: " + why_not);
+        any = true;
+        if (options.no_clobber) in_the_way.push_back(path);
+        if (!options.skip_existing) continue;
+        const std::string why_not = why_not_reusable(path, exr ? made_by : preview_made_by);
+        if (!why_not.empty()) {
+          log_info(path + ": exists but is made again: " + why_not);
+          reusable = false;
+        }
       }
-      if (options.no_clobber) in_the_way.push_back(path);
+      if (reusable && any) {
+        reuse[i] = 1;
+        // Whatever is reused is not in the way.
+        while (!in_the_way.empty() && (in_the_way.back() == out.path_for(seq.frames[i]) ||
+                                       in_the_way.back() == preview.path_for(seq.frames[i])))
+          in_the_way.pop_back();
+      }
     }
     if (!in_the_way.empty())
       throw Error(ErrorKind::kUsage, in_the_way.front(),
@@ -152,7 +183,7 @@ RunReport run_sequence(const RunOptions& options, const RunCallbacks& callbacks)
     FrameReport fr;
     fr.frame = seq.frames[i];
     fr.input = seq.pattern.path_for(fr.frame);
-    fr.output = out.path_for(fr.frame);
+    fr.output = write_exr ? out.path_for(fr.frame) : "";
     if (reuse[i]) {
       fr.ok = fr.skipped = true;
       report.frames.push_back(fr);
@@ -167,13 +198,21 @@ RunReport run_sequence(const RunOptions& options, const RunCallbacks& callbacks)
       fr.sanitized = g.sanitized;
       const auto composite_start = std::chrono::steady_clock::now();
       FrameResult result = pipeline.composite(g, std::move(lit.indirect));
+      if (callbacks.on_result) callbacks.on_result(g, result);
       const auto write_start = std::chrono::steady_clock::now();
       fr.gi_ms += std::chrono::duration<double, std::milli>(write_start - composite_start).count();
-      write_frame(fr.output, g,
-                  {{"", &result.composite, {"R", "G", "B", "A"}},
-                   {"indirect", &result.indirect, {"R", "G", "B"}},
-                   {"gi", &result.gi, {"R", "G", "B"}}},
-                  write);
+      if (write_preview)
+        detail::write_preview(preview.path_for(fr.frame), g, result.composite, pipeline.color(),
+                              preview_made_by);
+      if (write_exr) {
+        for (Image* layer : {&result.composite, &result.indirect, &result.gi})
+          pipeline.color().working_to_output(layer);
+        write_frame(fr.output, g,
+                    {{"", &result.composite, {"R", "G", "B", "A"}},
+                     {"indirect", &result.indirect, {"R", "G", "B"}},
+                     {"gi", &result.gi, {"R", "G", "B"}}},
+                    write);
+      }
       write.warn_collisions = false;  // one warning per run is enough
       fr.write_ms =
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - write_start)

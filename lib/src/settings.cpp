@@ -3,6 +3,7 @@
 
 #include <charconv>
 
+#include "ssgi/color.h"
 #include "ssgi/error.h"
 
 namespace ssgi {
@@ -118,6 +119,16 @@ std::vector<std::pair<std::string, std::string>> describe_settings(const GiSetti
                                    ? "ema:" + text(s.ema_alpha)
                                    : "window:" + text(s.temporal_radius));
   out.emplace_back("seed", text(s.seed));
+  // The colour spaces as given (the config by its path): the output's pixels depend on them.
+  const ColorSettings& c = s.color;
+  const std::string config = color_config_path(c);
+  out.emplace_back("colorconfig", config.empty() ? "none" : config);
+  if (!config.empty()) {
+    out.emplace_back("input-colorspace", c.input.empty() ? "auto" : c.input);
+    out.emplace_back("output-colorspace", c.output.empty() ? "working" : c.output);
+    out.emplace_back("env-colorspace", c.env.empty() ? "auto" : c.env);
+    out.emplace_back("working-space", c.working.empty() ? "scene_linear" : c.working);
+  }
   return out;
 }
 

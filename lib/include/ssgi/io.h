@@ -12,6 +12,8 @@
 
 namespace ssgi {
 
+class ColorManagement;
+
 // A set of roles, as bits (1u << Role).
 using RoleMask = unsigned;
 constexpr RoleMask role_bit(Role role) { return 1u << static_cast<int>(role); }
@@ -48,11 +50,13 @@ SequenceInfo open_sequence(const InputOptions& options);
 
 // Reads the roles in `roles` of one frame and converts them to the library's conventions
 // (planar depth with +inf background, unit camera-space normals, direct light with albedo).
-// Reads one channel range per subimage. Throws Error(kIO) for an unreadable file and
-// Error(kInput) naming it for unusable data (missing channel, window or resolution that
-// differs from `sequence`, no camera).
+// Reads one channel range per subimage. With `color`, the light and albedo passes (albedo,
+// direct, emission, beauty's R, G, B) go from the input space to the working space before
+// anything else (direct x albedo included); data passes are never transformed. Throws
+// Error(kIO) for an unreadable file and Error(kInput) naming it for unusable data (missing
+// channel, window or resolution that differs from `sequence`, no camera).
 GBuffer read_gbuffer(const SequenceInfo& sequence, int frame, RoleMask roles,
-                     const InputOptions& options);
+                     const InputOptions& options, const ColorManagement* color = nullptr);
 
 // The camera of one frame, from its header alone (or the options' sidecar / field of view).
 Camera read_camera(const SequenceInfo& sequence, int frame, const InputOptions& options);

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "ssgi/color.h"
 #include "ssgi/gbuffer.h"
 #include "ssgi/io.h"
 #include "ssgi/settings.h"
@@ -36,7 +37,8 @@ struct FrameResult {
 
 class Pipeline {
  public:
-  // Loads what the whole run shares (the environment map). Throws ssgi::Error.
+  // Loads what the whole run shares (the colour config and its processors, the environment
+  // map). Throws ssgi::Error.
   Pipeline(const SequenceInfo& sequence, const GiSettings& settings);
   ~Pipeline();
   Pipeline(const Pipeline&) = delete;
@@ -44,6 +46,8 @@ class Pipeline {
 
   const Plan& plan() const;
   const GiSettings& settings() const;
+  // The run's colour spaces: read_gbuffer takes it, and the outputs go through it.
+  const ColorManagement& color() const;
 
   // The light as traced (misses and bounces included) and denoised, at the trace grid's
   // resolution, with the grid's geometry as a G-buffer in grid units (depth, normals, motion and

@@ -7,13 +7,19 @@
 
 #include "ssgi/error.h"
 #include "ssgi/io.h"
+#include "ssgi/pipeline.h"
 #include "ssgi/settings.h"
 
 namespace ssgi {
 
 struct RunOptions {
   InputOptions input;
-  std::string output;  // output pattern, e.g. "out/shot.####.exr"
+  // Output pattern, e.g. "out/shot.####.exr"; empty: no frame is written (the results go to
+  // RunCallbacks::on_result only).
+  std::string output;
+  // --preview: each frame's composite through the display and view, e.g. "prev.####.png"
+  // (.png or .jpg), the size of the display window; empty: none.
+  std::string preview;
   WriteOptions write;
   GiSettings gi;
   bool fail_fast = false;  // --fail-fast: stop at the first frame that fails
@@ -54,6 +60,9 @@ struct RunCallbacks {
   std::function<void(int total, int reused)> on_start;
   // After each frame, written, reused or failed; `done` frames of `total` are behind.
   std::function<void(const FrameReport&, int done, int total)> on_frame;
+  // Each frame made (not those reused), before it is written: its G-buffer and results, the
+  // colour passes and results in the working space.
+  std::function<void(const GBuffer&, const FrameResult&)> on_result;
 };
 
 // Runs the pipeline over the sequence. Errors that concern the whole run (bad options, a

@@ -52,6 +52,18 @@ struct DenoiseSettings {
 // buffer's mesh (ssgi reference). All three follow the same surface model and miss rules.
 enum class Tracer { kSlices, kScreenSpace, kReference };
 
+// The colour spaces of a run, by OpenColorIO names (lib/include/ssgi/color.h applies them).
+// Empty means the default each comment gives.
+struct ColorSettings {
+  std::string config;   // --colorconfig: an OCIO config file; empty: $OCIO, else none
+  std::string input;    // --input-colorspace: the light and albedo passes; empty: working
+  std::string output;   // --output-colorspace: the colour layers ssgi writes; empty: working
+  std::string env;      // --env-colorspace: the environment map; empty: by its file type
+  std::string working;  // --working-space: where the GI arithmetic runs; empty: scene_linear
+  std::string display;  // --display: the preview's display; empty: the config's default
+  std::string view;     // --view: the preview's view; empty: the display's default
+};
+
 // Everything that decides the GI result of a frame.
 struct GiSettings {
   Tracer tracer = Tracer::kSlices;
@@ -86,6 +98,7 @@ struct GiSettings {
   int temporal_radius = 2;  // window: +-K frames
   float ema_alpha = 0.1f;   // EMA: weight of the current frame
   std::uint32_t seed = 0;
+  ColorSettings color;
 };
 
 // The presets (--preset): `draft` for look development, `default` (what GiSettings{} holds),

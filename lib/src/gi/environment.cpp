@@ -15,7 +15,7 @@ namespace ssgi::detail {
 
 Environment::Environment(std::array<float, 3> color) : color_(color) {}
 
-Environment Environment::from_file(const std::string& path, char up) {
+Environment Environment::from_file(const std::string& path, char up, const ColorManagement& color) {
   auto in = open_image(path);  // a clear error for a missing, empty or special file
   const OIIO::ImageSpec spec = in->spec();
   if (spec.nchannels < 3) throw_input(path, "environment map needs R, G, B channels");
@@ -29,28 +29,27 @@ Environment Environment::from_file(const std::string& path, char up) {
   if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, pixels.data()))
     throw_io(path, "cannot read environment map pixels: " + in->geterror());
   // An 8- or 16-bit map (PNG, JPEG, TIFF), or one that says it is sRGB, holds sRGB-encoded
-  // values: light is their decoding (IEC 61966-2-1, as OIIO's built-in sRGB transform), not the
-  // values themselves. Float maps (EXR, HDR) are linear.
+  // values: light is their decoding, not the values themselves (ColorManagement decides, with
+  // the config's sRGB texture space or the built-in curve). Float maps (EXR, HDR) are linear.
   const bool integer = spec.format.basetype != OIIO::TypeDesc::FLOAT &&
                        spec.format.basetype != OIIO::TypeDesc::HALF &&
                        spec.format.basetype != OIIO::TypeDesc::DOUBLE;
-  const bool srgb =
-      integer || OIIO::Strutil::iequals(spec.get_string_attribute("oiio:ColorSpace"), "sRGB");
-  if (srgb)
-    log_info(path + ": environment map is sRGB-encoded (" + spec.format.c_str() +
-             "), decoded to linear light");
   Environment env;
   env.up_ = up;
   env.map_ = Image(spec.width, spec.height, 3);
   const int idx[3] = {r, g, b};
   for (int c = 0; c < 3; ++c) {
     float* dst = env.map_.plane(c);
-    for (std::size_t p = 0; p < env.map_.plane_size(); ++p) {
-      float v = pixels[p * spec.nchannels + idx[c]];
-      if (srgb) v = v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
-      // Non-finite or negative texels would poison every pixel that sees them.
-      dst[p] = std::isfinite(v) ? std::clamp(v, 0.0f, 1e30f) : 0.0f;
-    }
+    for (std::size_t p = 0; p < env.map_.plane_size(); ++p)
+      dst[p] = pixels[p * spec.nchannels + idx[c]];
+  }
+  color.environment_to_working(&env.map_, path, spec.get_string_attribute("oiio:ColorSpace"),
+                               integer);
+  for (int c = 0; c < 3; ++c) {
+    float* dst = env.map_.plane(c);
+    // Non-finite or negative texels would poison every pixel that sees them.
+    for (std::size_t p = 0; p < env.map_.plane_size(); ++p)
+      dst[p] = std::isfinite(dst[p]) ? std::clamp(dst[p], 0.0f, 1e30f) : 0.0f;
   }
   return env;
 }

@@ -11,6 +11,7 @@
 
 #include "camera_header.h"
 #include "oiio_files.h"
+#include "ssgi/color.h"
 #include "ssgi/error.h"
 #include "ssgi/io.h"
 #include "ssgi/log.h"
@@ -387,7 +388,7 @@ Camera read_camera(const SequenceInfo& seq, int frame, const InputOptions& optio
 }
 
 GBuffer read_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
-                     const InputOptions& options) {
+                     const InputOptions& options, const ColorManagement* color) {
   const std::string path = seq.pattern.path_for(frame);
   auto in = open_exr(path);
   const OIIO::ImageSpec spec = in->spec();
@@ -438,9 +439,16 @@ GBuffer read_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
     convert_normals(g.normal, g.depth, preset.normal_space, g.camera, g.display_window,
                     g.data_window);
   }
-  if (wanted(Role::kAlbedo)) g.albedo = to_image(role_planes(Role::kAlbedo), w, h, &non_finite);
+  // Light and albedo into the working space as they are read; depth, normals and motion are
+  // data and stay as they are.
+  const auto colour_pass = [&](Role role) {
+    Image image = to_image(role_planes(role), w, h, &non_finite);
+    if (color && image.channels() >= 3) color->input_to_working(&image);
+    return image;
+  };
+  if (wanted(Role::kAlbedo)) g.albedo = colour_pass(Role::kAlbedo);
   if (wanted(Role::kDirect)) {
-    g.direct = to_image(role_planes(Role::kDirect), w, h, &non_finite);
+    g.direct = colour_pass(Role::kDirect);
     if (!preset.direct_includes_albedo) {
       if (g.albedo.empty()) throw_input(path, "direct light excludes albedo but there is none");
       for (int c = 0; c < 3; ++c)
@@ -448,14 +456,14 @@ GBuffer read_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
           g.direct.plane(c)[p] = finite_or(g.direct.plane(c)[p] * g.albedo.plane(c)[p], 0.0f);
     }
   }
-  if (wanted(Role::kEmission))
-    g.emission = to_image(role_planes(Role::kEmission), w, h, &non_finite);
+  if (wanted(Role::kEmission)) g.emission = colour_pass(Role::kEmission);
   if (wanted(Role::kMotion))
     convert_motion(role_planes(Role::kMotion), preset.motion, g.display_window, w, h, &g);
   if (wanted(Role::kBeauty)) {
     auto beauty = role_planes(Role::kBeauty);
     if (beauty.size() < 4) beauty.emplace_back(static_cast<std::size_t>(w) * h, 1.0f);
     g.beauty = to_image(beauty, w, h, &non_finite);
+    if (color) color->input_to_working(&g.beauty);  // R, G, B; alpha is coverage
   }
   g.sanitized = non_finite;
   if (non_finite > 0)
