@@ -5,7 +5,8 @@
 # is moved into place only when complete, so an interrupted run leaves no half scene.
 # Stock Blender does not write worldToCamera/worldToNDC; they are added here from the
 # camera.json the script writes (oiiotool keeps channels, float type and ZIP compression).
-# Prints the cache folder on the last line of stdout.
+# Prints the cache folder on the last line of stdout. A second run on the same cache waits for
+# the first (flock).
 # Usage: tests/accuracy/training/render.sh [SCENE...]   (default: every scene of scenes.py)
 # Environment: SSGI_TRAINING_CACHE (default ~/.cache/ssgi/training), SSGI_TRAINING_SAMPLES
 # (default 256), BLENDER (default blender). Needs blender 3.4, oiiotool, python3.
@@ -53,6 +54,9 @@ else
 fi
 [ ${#scenes[@]} -gt 0 ] || { echo "render.sh: $blender lists no scenes" >&2; exit 1; }
 mkdir -p "$cache"
+# One render at a time per cache: a second run waits, then finds the scenes done.
+exec 9> "$cache/.lock"
+flock 9
 for name in "${scenes[@]}"; do
   if complete "$cache/$name" "$name"; then
     echo "$name: rendered already" >&2
