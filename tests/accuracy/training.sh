@@ -10,18 +10,9 @@
 # blender.
 # Usage: tests/accuracy/training.sh [BUILD_DIR] [-- extra ssgi options]
 # Environment: SSGI_TRAINING_SCENES (training scenes to measure, space-separated, " " for
-# none; default all that training/scenes.py lists), and render.sh's SSGI_TRAINING_CACHE and BLENDER.
+# none; default all that training/scenes.py lists), render.sh's SSGI_TRAINING_CACHE, BLENDER.
 set -euo pipefail
-cd "$(dirname "$0")/../.."
-build=${1:-build}
-shift || true
-[ "${1:-}" = "--" ] && shift
-extra=("$@")
-data=../shared/data
-ssgi=$build/bin/ssgi
-truth=$build/bin/truth_error
-out=$(mktemp -d)
-trap 'rm -rf "$out"' EXIT
+source "$(dirname "$0")/common.sh"
 
 declare -A what=(
   [room]="interior, sun through a window; camera pans (sample data)"
@@ -55,13 +46,11 @@ for scene in room stage "${training[@]}"; do
   "$ssgi" run "$dir/$scene.####.exr" -o "$out/o.####.exr" -q --no-passthrough "${extra[@]}"
   end=$(date +%s.%N)
   seconds=$(echo "($end - $start) / ${#frames[@]}" | bc -l | xargs printf '%.2f')
-  read -r nogi oracle ind <<< "$(for f in "${frames[@]}"; do
-    n=${f%.exr}
-    "$truth" "$f" "$out/o.${n##*.}.exr"
-  done | awk '{ z += $1; i += $2; o += $5; n++ } END { printf "%.3f %.3f %.3f", z / n, o / n, i / n }')"
+  read -r nogi ind _ _ oracle <<< "$(truth_means "$dir" "$scene")"
   printf '| %s | %s | %s | %s | %s | %s |\n' "$scene" "${what[$scene]:-}" "$nogi" "$oracle" \
     "$ind" "$seconds"
   rows+=("$nogi $oracle $ind $seconds")
 done
 printf '%s\n' "${rows[@]}" | awk '{ z += $1; o += $2; i += $3; s += $4; n++ }
-  END { printf "| **mean** | %d scenes | %.3f | %.3f | %.3f | %.2f |\n", n, z / n, o / n, i / n, s / n }'
+  END { printf "| **mean** | %d scenes | %.3f | %.3f | %.3f | %.2f |\n",
+    n, z / n, o / n, i / n, s / n }'

@@ -66,7 +66,10 @@ for name in "${scenes[@]}"; do
   echo "$name: rendering $frames frames at $samples samples (log: $tmp/blender.log)" >&2
   start=$(date +%s)
   blender_run --scene "$name" --out "$tmp" --samples "$samples" --frames "$frames" \
-    > "$tmp/blender.log" 2>&1 || { echo "render.sh: $name failed, see $tmp/blender.log" >&2; exit 1; }
+    > "$tmp/blender.log" 2>&1 || {
+    echo "render.sh: $name failed, see $tmp/blender.log" >&2
+    exit 1
+  }
   add_cameras "$tmp" "$name"
   complete "$tmp" "$name" || { echo "render.sh: $name: incomplete output in $tmp" >&2; exit 1; }
   echo "$samples samples, $(( ($(date +%s) - start) / frames )) s/frame" > "$tmp/render.txt"

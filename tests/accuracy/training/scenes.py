@@ -10,7 +10,8 @@ denoising, 320x180, multilayer 32-bit float ZIP EXR, view layer "ViewLayer" with
 ../shared/data) and writes DIR/camera.json in the sample's format, including each frame's
 OpenEXR worldToCamera and worldToNDC (camera_matrices.py). Stock Blender does not put those in
 the headers: render.sh adds them afterwards. --list prints the scene names and what each one
-exercises (SCENE<TAB>name<TAB>description; Blender prints other lines too), --no-render writes camera.json only.
+exercises (SCENE<TAB>name<TAB>description; Blender prints other lines too), --no-render
+writes camera.json only.
 Materials are pure diffuse (Diffuse BSDF) with varied albedo; emitters are Emission shaders.
 """
 
@@ -28,30 +29,28 @@ import camera_matrices  # noqa: E402
 WIDTH, HEIGHT = 320, 180
 
 
-def material(name, rgb):
+def node_material(name, node_type, inputs, output):
+    """A material of one shader node with the given input values."""
     m = bpy.data.materials.new(name)
     m.use_nodes = True
     nodes = m.node_tree.nodes
     nodes.clear()
-    bsdf = nodes.new("ShaderNodeBsdfDiffuse")
-    bsdf.inputs["Color"].default_value = (*rgb, 1.0)
-    bsdf.inputs["Roughness"].default_value = 0.0
+    shader = nodes.new(node_type)
+    for socket, value in inputs.items():
+        shader.inputs[socket].default_value = value
     out = nodes.new("ShaderNodeOutputMaterial")
-    m.node_tree.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
+    m.node_tree.links.new(shader.outputs[output], out.inputs["Surface"])
     return m
+
+
+def material(name, rgb):
+    return node_material(name, "ShaderNodeBsdfDiffuse", {"Color": (*rgb, 1.0), "Roughness": 0.0},
+                         "BSDF")
 
 
 def emitter(name, rgb, strength):
-    m = bpy.data.materials.new(name)
-    m.use_nodes = True
-    nodes = m.node_tree.nodes
-    nodes.clear()
-    em = nodes.new("ShaderNodeEmission")
-    em.inputs["Color"].default_value = (*rgb, 1.0)
-    em.inputs["Strength"].default_value = strength
-    out = nodes.new("ShaderNodeOutputMaterial")
-    m.node_tree.links.new(em.outputs["Emission"], out.inputs["Surface"])
-    return m
+    return node_material(name, "ShaderNodeEmission",
+                         {"Color": (*rgb, 1.0), "Strength": strength}, "Emission")
 
 
 def assign(obj, mat):
@@ -329,7 +328,8 @@ def plaza(frames):
     box_span("Facing wall", (-6.0, 12.0, 0.0), (4.0, 13.0, 5.0), material("ochre", (0.7, 0.5, 0.2)))
     box_span("Low wall", (-2.5, 4.0, 0.0), (1.5, 4.3, 0.9), material("white", (0.8, 0.8, 0.78)))
     box_span("Tower", (6.0, 9.0, 0.0), (9.0, 12.0, 12.0), material("blue-grey", (0.3, 0.35, 0.45)))
-    box_span("Block", (-11.0, 5.0, 0.0), (-7.0, 9.0, 3.5), material("terracotta", (0.6, 0.25, 0.15)))
+    box_span("Block", (-11.0, 5.0, 0.0), (-7.0, 9.0, 3.5),
+             material("terracotta", (0.6, 0.25, 0.15)))
     box("Kiosk", (3.5, 5.5, 1.2), (1.6, 1.6, 2.4), material("green", (0.15, 0.45, 0.2)),
         rotation=(0, 0, math.radians(30)))
     sphere("Bollard ball", (-4.0, 6.0, 0.5), 0.5, material("red", (0.75, 0.1, 0.1)))
