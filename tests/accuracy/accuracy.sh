@@ -5,16 +5,7 @@
 # of the composite against (DiffDir + DiffInd) x DiffCol + Emit, with the wall time of one
 # `ssgi run` over the six-frame sequence divided by six. Usage: tests/accuracy/accuracy.sh [BUILD_DIR] [-- extra ssgi options]
 set -euo pipefail
-cd "$(dirname "$0")/../.."
-build=${1:-build}
-shift || true
-[ "${1:-}" = "--" ] && shift
-extra=("$@")
-data=../shared/data
-ssgi=$build/bin/ssgi
-truth=$build/bin/truth_error
-out=$(mktemp -d)
-trap 'rm -rf "$out"' EXIT
+source "$(dirname "$0")/common.sh"
 
 settings=(
   "no GI|"
@@ -46,12 +37,8 @@ for scene in room stage; do
       "$ssgi" run "$data/$scene/$scene.####.exr" -o "$out/o.####.exr" -q --no-passthrough \
         --rays 1 --bounces 1 --temporal none
     fi
-    read -r ind comp <<< "$(for f in "${frames[@]}"; do
-      n=${f##*.0}
-      "$truth" "$f" "$out/o.0$n"
-    done | awk -v nogi="$([ "$name" = "no GI" ] && echo 1 || echo 0)" \
-      '{ if (nogi) { i += $1; c += $3 } else { i += $2; c += $4 }; n++ }
-       END { printf "%.3f %.3f", i / n, c / n }')"
+    read -r ind0 ind comp0 comp _ <<< "$(truth_means "$data/$scene" "$scene")"
+    [ "$name" != "no GI" ] || { ind=$ind0; comp=$comp0; }
     printf '| %s | %s | %s | %s | %s |\n' "$scene" "$name" "$ind" "$comp" "$seconds"
   done
 done

@@ -1,7 +1,10 @@
 // Error of ssgi's output against a path-traced truth that the input carries (Cycles' DiffInd):
 // relative RMSE (RMSE / mean of the truth over surface pixels, all channels) of `indirect`
 // against DiffInd, and of the composite against (DiffDir + DiffInd) x DiffCol + Emit, plus
-// the same for no GI at all. Usage: truth_error INPUT.exr OUTPUT.exr [LAYER_PREFIX]
+// the same for no GI at all, and of the oracle ambient: the truth's own mean DiffInd over the
+// surface pixels, per channel, as a constant indirect (the best a constant can do on this
+// frame). Surface pixels: Depth.Z < 1e9. Usage: truth_error INPUT.exr OUTPUT.exr [LAYER_PREFIX]
+// prints: no-GI indirect, indirect, no-GI composite, composite, oracle-ambient indirect.
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -28,7 +31,8 @@ int main(int argc, char** argv) {
   const Planes out = accuracy::read_planes(argv[2], &w2, &h2);
   const std::string v = "ViewLayer.";
   const auto& depth = plane(in, v + "Depth.Z");
-  double se_ind = 0, se_comp = 0, se_ind0 = 0, se_comp0 = 0, sum_ind = 0, sum_comp = 0;
+  double se_ind = 0, se_comp = 0, se_ind0 = 0, se_comp0 = 0, se_oracle = 0, sum_ind = 0,
+         sum_comp = 0;
   std::size_t n = 0;
   const char* rgb[3] = {"R", "G", "B"};
   for (int c = 0; c < 3; ++c) {
@@ -38,12 +42,21 @@ int main(int argc, char** argv) {
     const auto& emit = plane(in, v + "Emit." + rgb[c]);
     const auto& ind = plane(out, prefix + "indirect." + rgb[c]);
     const auto& comp = plane(out, prefix + rgb[c]);
+    double sum_channel = 0;
+    std::size_t n_channel = 0;
+    for (std::size_t i = 0; i < depth.size(); ++i) {
+      if (!(depth[i] < 1e9f)) continue;
+      sum_channel += truth_ind[i];
+      ++n_channel;
+    }
+    const double oracle = n_channel ? sum_channel / n_channel : 0.0;
     for (std::size_t i = 0; i < depth.size(); ++i) {
       if (!(depth[i] < 1e9f)) continue;
       const double truth_comp = (dir[i] + truth_ind[i]) * col[i] + emit[i];
       const double none_comp = dir[i] * col[i] + emit[i];
       se_ind += (ind[i] - truth_ind[i]) * double(ind[i] - truth_ind[i]);
       se_ind0 += truth_ind[i] * double(truth_ind[i]);
+      se_oracle += (oracle - truth_ind[i]) * (oracle - truth_ind[i]);
       se_comp += (comp[i] - truth_comp) * (comp[i] - truth_comp);
       se_comp0 += (none_comp - truth_comp) * (none_comp - truth_comp);
       sum_ind += truth_ind[i];
@@ -52,8 +65,8 @@ int main(int argc, char** argv) {
     }
   }
   const double mean_ind = sum_ind / n, mean_comp = sum_comp / n;
-  std::printf("%.4f %.4f %.4f %.4f\n", std::sqrt(se_ind0 / n) / mean_ind,
+  std::printf("%.4f %.4f %.4f %.4f %.4f\n", std::sqrt(se_ind0 / n) / mean_ind,
               std::sqrt(se_ind / n) / mean_ind, std::sqrt(se_comp0 / n) / mean_comp,
-              std::sqrt(se_comp / n) / mean_comp);
+              std::sqrt(se_comp / n) / mean_comp, std::sqrt(se_oracle / n) / mean_ind);
   return 0;
 }

@@ -1,0 +1,25 @@
+# Sourced by the accuracy scripts (accuracy.sh, training.sh) with their arguments
+# [BUILD_DIR] [-- extra ssgi options]: moves to the repository and sets build, extra (the ssgi
+# options), data (the sample scenes), ssgi, truth (truth_error) and out (a temporary folder,
+# removed on exit).
+cd "$(dirname "${BASH_SOURCE[0]}")/../.."
+build=${1:-build}
+shift || true
+[ "${1:-}" = "--" ] && shift
+extra=("$@")
+data=../shared/data
+ssgi=$build/bin/ssgi
+truth=$build/bin/truth_error
+out=$(mktemp -d)
+trap 'rm -rf "$out"' EXIT
+
+# truth_means DIR SCENE: truth_error's five columns, each averaged over the frames
+# DIR/SCENE.*.exr, against ssgi's output $out/o.<frame>.exr.
+truth_means() {
+  local f n
+  for f in "$1/$2".*.exr; do
+    n=${f%.exr}
+    "$truth" "$f" "$out/o.${n##*.}.exr"
+  done | awk '{ for (c = 1; c <= 5; ++c) s[c] += $c; n++ }
+    END { printf "%.3f %.3f %.3f %.3f %.3f\n", s[1] / n, s[2] / n, s[3] / n, s[4] / n, s[5] / n }'
+}
