@@ -173,15 +173,18 @@ struct Pipeline::Impl {
   GiSettings settings;
   Plan plan;
   detail::Environment env;
+  PipelineMemory memory;
 
   // Tracing, misses and bounces on the trace grid: the light before the denoiser, and, when
   // `grid_out` is given, the grid as a G-buffer for the temporal stage.
   Image trace(const GBuffer& g, GBuffer* grid_out) const;
 };
 
-Pipeline::Pipeline(const SequenceInfo& seq, const GiSettings& settings)
+Pipeline::Pipeline(const SequenceInfo& seq, const GiSettings& settings,
+                   const PipelineMemory& memory)
     : impl_(std::make_unique<Impl>()) {
   impl_->settings = settings;
+  impl_->memory = memory;
   impl_->plan = make_plan(seq, settings);
   impl_->env = settings.env_map.empty()
                    ? detail::Environment(settings.env_color)
@@ -240,20 +243,22 @@ Image Pipeline::Impl::trace(const GBuffer& g, GBuffer* grid_out) const {
   const double closure = detail::closure_weight(g, s.miss);
   const detail::TraceGrid grid =
       detail::make_trace_grid(g, reflected, plan.trace_scale, static_cast<float>(s.thickness));
-  detail::WeightedHits hits;
+  if (grid_out) *grid_out = grid_gbuffer(g, grid);
   switch (s.tracer) {
-    case Tracer::kReference:
-      hits = detail::weighted_from_rays(grid, detail::trace_reference(g, s, env));
-      break;
-    case Tracer::kScreenSpace:
-      hits = detail::weighted_from_rays(grid, detail::march_screen_space(g, s, env));
-      break;
+    case Tracer::kReference: {
+      const detail::ReferenceHits hits(g, s, env, memory.reference_hits_bytes);
+      return detail::gather_bounces(grid, hits, s.bounces, closure);
+    }
+    case Tracer::kScreenSpace: {
+      // The march's rays are freed before the bounces.
+      const detail::WeightedHits hits =
+          detail::weighted_from_rays(grid, detail::march_screen_space(g, s, env));
+      return detail::gather_bounces(grid, hits, s.bounces, closure);
+    }
     case Tracer::kSlices:
-      hits = detail::trace_slices(g, grid, s, env);
       break;
   }
-  if (grid_out) *grid_out = grid_gbuffer(g, grid);
-  return detail::gather_bounces(grid, hits, s.bounces, closure);
+  return detail::gather_bounces(grid, detail::trace_slices(g, grid, s, env), s.bounces, closure);
 }
 
 Pipeline::TracedLight Pipeline::trace_light(const GBuffer& g) const {

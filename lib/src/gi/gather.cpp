@@ -135,22 +135,47 @@ WeightedHits weighted_from_rays(const TraceGrid& grid, const RayHits& rays) {
 
 namespace {
 
+// WeightedHits as a HitSource.
+class HeldHits final : public HitSource {
+ public:
+  HeldHits(const TraceGrid& grid, const WeightedHits& hits) : width_(grid.width), hits_(hits) {}
+  HitRow row(int by, HitScratch*) const override {
+    HitRow r;
+    r.begin = hits_.begin.data() + static_cast<std::size_t>(by) * width_;
+    r.pixel = hits_.pixel.data();
+    r.weight = hits_.weight.data();
+    return r;
+  }
+  const Image& miss() const override { return hits_.miss; }
+  const Image& env() const override { return hits_.env; }
+
+ private:
+  int width_;
+  const WeightedHits& hits_;
+};
+
 // One gather: the light `radiance(pixel)` of every hit, plus the miss light.
 template <typename Radiance>
-Image gather_once(const TraceGrid& grid, const WeightedHits& hits, const Radiance& radiance,
+Image gather_once(const TraceGrid& grid, const HitSource& hits, const Radiance& radiance,
                   const MissLight& miss) {
   Image out(grid.width, grid.height, 3);
   parallel_for_rows(grid.height, [&](int by) {
+    HitScratch scratch;
+    const HitRow row = hits.row(by, &scratch);
+    const float* miss_share = hits.miss().plane(0);
+    const Image& env = hits.env();
     for (int bx = 0; bx < grid.width; ++bx) {
       const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
       if (grid.origin[s] < 0) continue;
-      const float m = hits.miss.plane(0)[s];
+      const float m = miss_share[s];
       std::array<float, 3> sum;
       for (int c = 0; c < 3; ++c)
-        sum[c] = miss.env_weight * hits.env.plane(c)[s] + m * miss.frame_radiance[c];
-      for (std::uint32_t e = hits.begin[s]; e < hits.begin[s + 1]; ++e) {
-        const std::array<float, 3> l = radiance(hits.pixel[e]);
-        for (int c = 0; c < 3; ++c) sum[c] += hits.weight[e] * l[c];
+        sum[c] = miss.env_weight * env.plane(c)[s] + m * miss.frame_radiance[c];
+      const std::uint32_t first = row.begin[bx], end = row.begin[bx + 1];
+      for (std::uint32_t e = first; e < end; ++e) {
+        const std::array<float, 3> l = radiance(row.pixel[e]);
+        const float weight = row.weight ? row.weight[e] : row.uniform_weight;
+        for (int c = 0; c < 3; ++c) sum[c] += weight * l[c];
       }
       for (int c = 0; c < 3; ++c) out.plane(c)[s] = sum[c];
     }
@@ -181,6 +206,10 @@ MissLight miss_light_over_grid(const TraceGrid& grid, const Radiance& radiance, 
 }  // namespace
 
 Image gather_bounces(const TraceGrid& grid, const WeightedHits& hits, int bounces, double closure) {
+  return gather_bounces(grid, HeldHits(grid, hits), bounces, closure);
+}
+
+Image gather_bounces(const TraceGrid& grid, const HitSource& hits, int bounces, double closure) {
   // Each bounce's light per trace sample, packed RGB_ so that a hit is one 16-byte load: at 2 s
   // the light of its front (what it reflects plus albedo x its indirect light), at 2 s + 1 that
   // of its unseen back (albedo x indirect only), which hits from behind bring (surface_model.h).

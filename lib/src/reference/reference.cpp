@@ -389,27 +389,26 @@ class MissRadiance {
   Mat4d camera_to_world_;
 };
 
-// Traces pixel (x, y)'s rays into its slice of `hits`: the march's rays (PixelRays).
+// Pixel (x, y)'s rays (the march's, PixelRays): the pixel each one's light comes from, -1 for
+// a miss, into hit[0, rays); the number of misses and the sum of the environment light they
+// saw, in ray order, into *misses and env_sum.
 void trace_pixel(const GBuffer& g, const GiSettings& settings, const ReferenceTracer& tracer,
-                 const MissRadiance& miss_radiance, bool black_env, int x, int y, RayHits* hits) {
+                 const MissRadiance& miss_radiance, bool black_env, int x, int y, std::int32_t* hit,
+                 int* misses, float env_sum[3]) {
   const PixelRays rays(g, settings, x, y);
-  const std::size_t pixel = static_cast<std::size_t>(y) * g.width() + x;
-  std::int32_t* out = &hits->hit[pixel * hits->rays];
-  float env_sum[3] = {0, 0, 0};
-  int misses = 0;
-  for (int k = 0; k < hits->rays; ++k) {
+  env_sum[0] = env_sum[1] = env_sum[2] = 0;
+  *misses = 0;
+  for (int k = 0; k < settings.rays; ++k) {
     float jitter;  // the march's; Embree needs none
     const Vec3f d = rays.direction(k, &jitter);
-    const int hit = tracer.trace(rays.origin(), d, x, y);
-    out[k] = hit >= 0 ? mark_hit(g, hit, rays.origin()) : hit;
-    if (hit >= 0) continue;
-    ++misses;
+    const int end = tracer.trace(rays.origin(), d, x, y);
+    hit[k] = end >= 0 ? mark_hit(g, end, rays.origin()) : end;
+    if (end >= 0) continue;
+    ++*misses;
     if (black_env) continue;
     const auto l = miss_radiance(d);
     for (int ch = 0; ch < 3; ++ch) env_sum[ch] += l[ch];
   }
-  for (int ch = 0; ch < 3; ++ch) hits->env_sum.plane(ch)[pixel] = env_sum[ch];
-  hits->miss_count.plane(0)[pixel] = static_cast<float>(misses);
 }
 
 }  // namespace
@@ -424,11 +423,107 @@ RayHits trace_reference(const GBuffer& g, const GiSettings& settings, const Envi
   hits.env_sum = Image(w, h, 3);
   hits.miss_count = Image(w, h, 1);
   parallel_for_rows(h, [&](int y) {
-    for (int x = 0; x < w; ++x)
-      if (g.is_surface(x, y))
-        trace_pixel(g, settings, tracer, miss_radiance, env.is_black(), x, y, &hits);
+    for (int x = 0; x < w; ++x) {
+      if (!g.is_surface(x, y)) continue;
+      const std::size_t pixel = static_cast<std::size_t>(y) * w + x;
+      int misses;
+      float env_sum[3];
+      trace_pixel(g, settings, tracer, miss_radiance, env.is_black(), x, y,
+                  &hits.hit[pixel * hits.rays], &misses, env_sum);
+      for (int ch = 0; ch < 3; ++ch) hits.env_sum.plane(ch)[pixel] = env_sum[ch];
+      hits.miss_count.plane(0)[pixel] = static_cast<float>(misses);
+    }
   });
   return hits;
 }
+
+struct ReferenceHits::Impl {
+  Impl(const GBuffer& g, const GiSettings& settings, const Environment& env)
+      : g(g),
+        settings(settings),
+        tracer(g, settings, SurfaceModel{static_cast<float>(settings.thickness)}),
+        miss_radiance(g, env),
+        black_env(env.is_black()) {}
+
+  // Row y's hits into `begin` (width + 1 offsets) and `pixel`, as weighted_from_rays packs
+  // them; its miss shares and environment light into miss and env.
+  void trace_row(int y, std::vector<std::uint32_t>* begin, std::vector<std::int32_t>* pixel) {
+    const int w = g.width();
+    const float inv = 1.0f / static_cast<float>(settings.rays);
+    std::vector<std::int32_t> rays(settings.rays);
+    begin->resize(w + 1);
+    pixel->clear();
+    for (int x = 0; x < w; ++x) {
+      (*begin)[x] = static_cast<std::uint32_t>(pixel->size());
+      if (!g.is_surface(x, y)) continue;
+      int misses;
+      float env_sum[3];
+      trace_pixel(g, settings, tracer, miss_radiance, black_env, x, y, rays.data(), &misses,
+                  env_sum);
+      for (const std::int32_t hit : rays)
+        if (hit >= 0) pixel->push_back(hit);
+      const std::size_t p = static_cast<std::size_t>(y) * w + x;
+      miss.plane(0)[p] = static_cast<float>(misses) * inv;
+      for (int ch = 0; ch < 3; ++ch) env.plane(ch)[p] = env_sum[ch] * inv;
+    }
+    (*begin)[w] = static_cast<std::uint32_t>(pixel->size());
+  }
+
+  const GBuffer& g;
+  const GiSettings& settings;
+  const ReferenceTracer tracer;
+  const MissRadiance miss_radiance;
+  const bool black_env;
+  Image miss, env;
+  int kept_rows = 0;  // rows [0, kept_rows) keep their hits once traced
+  struct Row {
+    bool traced = false;
+    std::vector<std::uint32_t> begin;
+    std::vector<std::int32_t> pixel;
+  };
+  std::vector<Row> rows;
+};
+
+std::size_t ReferenceHits::row_bytes(int width, int rays) {
+  return static_cast<std::size_t>(width) * rays * sizeof(std::int32_t) +
+         (static_cast<std::size_t>(width) + 1) * sizeof(std::uint32_t);
+}
+
+ReferenceHits::ReferenceHits(const GBuffer& g, const GiSettings& settings, const Environment& env,
+                             std::size_t budget_bytes)
+    : impl_(std::make_unique<Impl>(g, settings, env)) {
+  const int w = g.width(), h = g.height();
+  impl_->miss = Image(w, h, 1);
+  impl_->env = Image(w, h, 3);
+  impl_->rows.resize(h);
+  // A single bounce reads each row once: nothing to keep.
+  if (settings.bounces > 1)
+    impl_->kept_rows = static_cast<int>(
+        std::min<std::size_t>(h, budget_bytes / row_bytes(w, std::max(1, settings.rays))));
+}
+
+ReferenceHits::~ReferenceHits() = default;
+
+HitRow ReferenceHits::row(int by, HitScratch* scratch) const {
+  Impl::Row& kept = impl_->rows[by];
+  HitRow r;
+  r.uniform_weight = 1.0f / static_cast<float>(impl_->settings.rays);
+  if (by < impl_->kept_rows) {
+    if (!kept.traced) impl_->trace_row(by, &kept.begin, &kept.pixel);
+    kept.traced = true;
+    r.begin = kept.begin.data();
+    r.pixel = kept.pixel.data();
+    return r;
+  }
+  // Traced again for each bounce: the same rays meet the same pixels. The first tracing also
+  // set the row's miss shares and environment light, which tracing again rewrites unchanged.
+  impl_->trace_row(by, &scratch->begin, &scratch->pixel);
+  r.begin = scratch->begin.data();
+  r.pixel = scratch->pixel.data();
+  return r;
+}
+
+const Image& ReferenceHits::miss() const { return impl_->miss; }
+const Image& ReferenceHits::env() const { return impl_->env; }
 
 }  // namespace ssgi::detail
