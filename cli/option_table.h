@@ -77,6 +77,7 @@ enum OptionId : int {
   kPlot,
   kReferenceSpp,
   kRepeat,
+  kMaxMemory,
 };
 
 enum class OptionGroup { kInput, kGi, kOutput, kGeneral };
