@@ -51,9 +51,19 @@ TEST(Memory, ParsesSizesInPowersOf1024) {
   EXPECT_EQ(memory_size_text(1536 * kMiB), "1.5 GiB");
 }
 
+int next_tree() {
+  static int trees = 0;
+  return ++trees;
+}
+
 // A fake cgroup tree and environment under the test's temporary directory.
 struct FakeScheduler {
-  std::string root = (fs::path(testing::TempDir()) / "ssgi_fake_cgroup").string();
+  // One tree per test and object: ctest runs the tests of this file side by side.
+  std::string root = (fs::path(testing::TempDir()) /
+                      ("ssgi_fake_cgroup." +
+                       std::string(testing::UnitTest::GetInstance()->current_test_info()->name()) +
+                       "." + std::to_string(next_tree())))
+                         .string();
   std::map<std::string, std::string> env;
 
   FakeScheduler() {
