@@ -252,6 +252,11 @@ const std::vector<OptionSpec> kTable = {
      [](const RunOptions&) { return std::string("auto"); }},
     {kThreads, "threads", 0, "N", OptionGroup::kGeneral, kReading,
      "worker threads (default: the scheduler's allocation, else the CPUs allowed)", nullptr},
+    {kMaxMemory, "max-memory", 0, "SIZE", OptionGroup::kGeneral, kRunCommand | kReferenceCommand,
+     "refuse the run, before computing anything, if its estimated peak memory is over SIZE "
+     "(500M, 2G or bytes; default: the scheduler's limit, Slurm's allocation or the cgroup's; "
+     "-v says which)",
+     nullptr},
     {kSimd, "simd", 0, "TARGET", OptionGroup::kGeneral, kReading,
      "the kernels' instruction set: auto, a target this CPU has (avx2, sse4, ...; ssgi info "
      "lists them) or scalar; every one gives the same bits (default: $SSGI_SIMD, else auto)",

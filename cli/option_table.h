@@ -87,6 +87,7 @@ enum OptionId : int {
   kView,
   kPreview,
   kReference,
+  kMaxMemory,
 };
 
 enum class OptionGroup { kInput, kGi, kColor, kOutput, kGeneral };

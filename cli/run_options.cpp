@@ -13,6 +13,7 @@
 #include "ssgi/error.h"
 #include "ssgi/io.h"
 #include "ssgi/log.h"
+#include "ssgi/memory.h"
 #include "ssgi/simd.h"
 
 namespace ssgi_cli {
@@ -263,6 +264,9 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
       case kThreads:
         o.threads = static_cast<int>(parse_long("threads", a, 0, 4096));
         break;
+      case kMaxMemory:
+        o.run.memory_limit = {ssgi::parse_memory_size(a), "--max-memory"};
+        break;
       case kCompression:
         o.run.write.compression = ssgi::parse_compression(a);
         break;
@@ -372,6 +376,7 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
   if (o.verbose && o.quiet)
     ssgi::throw_usage("-v (--verbose) and -q (--quiet) contradict each other");
   if (o.help) return o;
+  if (o.run.memory_limit.bytes == 0) o.run.memory_limit = ssgi::scheduler_memory_limit();
   // The kernels' target: --simd, else SSGI_SIMD (a bad value of either is a usage error here).
   const bool simd_given = !o.simd.empty();
   if (!simd_given && std::getenv("SSGI_SIMD") != nullptr) o.simd = std::getenv("SSGI_SIMD");

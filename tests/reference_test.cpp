@@ -13,8 +13,11 @@
 #include <string>
 #include <vector>
 
+#include "composite.h"
 #include "directions.h"
 #include "fixture_frame.h"
+#include "gather.h"
+#include "misses.h"
 #include "ssgi/compare.h"
 #include "ssgi/io.h"
 #include "ssgi/pipeline.h"
@@ -187,6 +190,40 @@ TEST(Reference, SameHitsForAnyThreadCount) {
   EXPECT_EQ(one.hit, two.hit);
   EXPECT_EQ(two.hit, again.hit);
   EXPECT_EQ(one.env_sum.data(), two.env_sum.data());
+}
+
+// The bounded hits give the light of the whole frame's hits held at once (what the reference
+// kept before, 4 bytes per ray of the frame), bit for bit, whether they keep every row, some or
+// none (then each bounce traces again), for 1 and 2 threads.
+TEST(Reference, BoundedHitsGiveTheLightOfAllHitsHeld) {
+  GiSettings s = reference_settings(16, {0.1f, 0.2f, 0.3f});
+  s.bounces = 3;
+  s.miss = MissMode::kFrame;
+  const Frame f = load("sample/sample.0001.exr", s);
+  const detail::Environment env(s.env_color);
+  const Image reflected = detail::reflected_radiance(f.g, false);
+  const detail::TraceGrid grid =
+      detail::make_trace_grid(f.g, reflected, 1, static_cast<float>(s.thickness));
+  const detail::MissModel misses(f.g, s.miss, env);
+  const Image held = detail::gather_bounces(
+      grid, detail::weighted_from_rays(grid, detail::trace_reference(f.g, s, misses)), s.bounces,
+      misses);
+  double sum = 0;
+  for (float v : held.data()) sum += v;
+  ASSERT_GT(sum, 0);
+  const std::size_t row = detail::ReferenceHits::row_bytes(f.g.width(), s.rays);
+  for (const std::size_t budget : {std::size_t{0}, row * 5 + 1, row * f.g.height()}) {
+    for (const int threads : {1, 2}) {
+      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+      const detail::ReferenceHits hits(f.g, s, misses, budget);
+      const Image bounded = detail::gather_bounces(grid, hits, s.bounces, misses);
+      EXPECT_EQ(bounded.data(), held.data()) << "budget " << budget << ", " << threads;
+    }
+  }
+  // And the pipeline's reference with a budget of no rows is the one with the default.
+  const Image by_default = indirect(f, s);
+  const Image no_rows_kept = Pipeline(f.seq, s, {0}).indirect_light(f.g);
+  EXPECT_EQ(by_default.data(), no_rows_kept.data());
 }
 
 struct MarchSetting {

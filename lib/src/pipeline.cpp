@@ -175,15 +175,18 @@ struct Pipeline::Impl {
   Plan plan;
   ColorManagement color;
   detail::Environment env;
+  PipelineMemory memory;
 
   // Tracing, misses and bounces on the trace grid: the light before the denoiser, and, when
   // `grid_out` is given, the grid as a G-buffer for the temporal stage.
   Image trace(const GBuffer& g, GBuffer* grid_out) const;
 };
 
-Pipeline::Pipeline(const SequenceInfo& seq, const GiSettings& settings)
+Pipeline::Pipeline(const SequenceInfo& seq, const GiSettings& settings,
+                   const PipelineMemory& memory)
     : impl_(std::make_unique<Impl>()) {
   impl_->settings = settings;
+  impl_->memory = memory;
   impl_->plan = make_plan(seq, settings);
   impl_->color = color_management_for(settings.color, seq);
   for (const std::string& reason : impl_->color.reasons()) impl_->plan.reasons.push_back(reason);
@@ -246,20 +249,23 @@ Image Pipeline::Impl::trace(const GBuffer& g, GBuffer* grid_out) const {
       detail::make_trace_grid(g, reflected, plan.trace_scale, static_cast<float>(s.thickness));
   const detail::MissModel misses(g, s.miss, env);
   log_info("frame " + std::to_string(g.frame) + ": " + misses.describe());
-  detail::WeightedHits hits;
+  if (grid_out) *grid_out = grid_gbuffer(g, grid);
   switch (s.tracer) {
-    case Tracer::kReference:
-      hits = detail::weighted_from_rays(grid, detail::trace_reference(g, s, misses));
-      break;
-    case Tracer::kScreenSpace:
-      hits = detail::weighted_from_rays(grid, detail::march_screen_space(g, s, misses));
-      break;
+    case Tracer::kReference: {
+      const detail::ReferenceHits hits(g, s, misses, memory.reference_hits_bytes);
+      return detail::gather_bounces(grid, hits, s.bounces, misses);
+    }
+    case Tracer::kScreenSpace: {
+      // The march's rays are freed before the bounces.
+      const detail::WeightedHits hits =
+          detail::weighted_from_rays(grid, detail::march_screen_space(g, s, misses));
+      return detail::gather_bounces(grid, hits, s.bounces, misses);
+    }
     case Tracer::kSlices:
-      hits = detail::trace_slices(g, grid, s, misses);
       break;
   }
-  if (grid_out) *grid_out = grid_gbuffer(g, grid);
-  return detail::gather_bounces(grid, hits, s.bounces, misses);
+  return detail::gather_bounces(grid, detail::trace_slices(g, grid, s, misses), s.bounces,
+                                misses);
 }
 
 Pipeline::TracedLight Pipeline::trace_light(const GBuffer& g) const {

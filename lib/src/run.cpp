@@ -11,6 +11,7 @@
 
 #include "frame_source.h"
 #include "preview.h"
+#include "parallel.h"
 #include "ssgi/log.h"
 #include "ssgi/pipeline.h"
 #include "ssgi/settings.h"
@@ -81,6 +82,29 @@ std::string settings_text(const RunOptions& o, const SequenceInfo& seq) {
   return text;
 }
 
+// The pipeline's memory under the run's limit; throws Error(kInput) when the estimated peak is
+// over the limit.
+PipelineMemory check_memory(const RunOptions& o, const SequenceInfo& seq) {
+  const Plan plan = make_plan(seq, o.gi);
+  const int threads = detail::worker_threads();
+  const MemoryLimit& limit = o.memory_limit;
+  const PipelineMemory memory = pipeline_memory_within(limit, seq, plan, o.gi, o.write, threads);
+  const MemoryEstimate need = estimate_run_memory(seq, plan, o.gi, o.write, threads, memory);
+  log_info("memory: estimated peak " + memory_size_text(need.bytes) + " (" + need.parts +
+           "); limit " +
+           (limit.bytes ? memory_size_text(limit.bytes) + " from " + limit.source
+                        : std::string("none (no --max-memory, no scheduler limit)")));
+  if (limit.bytes && need.bytes > limit.bytes)
+    throw Error(ErrorKind::kInput, seq.pattern.path_for(seq.frames.front()),
+                "the run needs an estimated " + memory_size_text(need.bytes) + " (" + need.parts +
+                    "), over the limit of " + memory_size_text(limit.bytes) + " from " +
+                    limit.source);
+  if (o.gi.tracer == Tracer::kReference && o.gi.bounces > 1)
+    log_info("memory: the reference keeps up to " + memory_size_text(memory.reference_hits_bytes) +
+             " of hits for bounces after the first; rows beyond that are traced again");
+  return memory;
+}
+
 }  // namespace
 
 int RunReport::failed() const {
@@ -109,10 +133,12 @@ RunReport run_sequence(const RunOptions& options, const RunCallbacks& callbacks)
     check_outputs(seq, pattern, spec, what);
     return pattern;
   };
+  // Over the memory limit: refused before the outputs' directories are made.
+  const PipelineMemory memory = check_memory(options, seq);
   const SequencePattern out = output_pattern(options.output, "output");
   const SequencePattern preview = output_pattern(options.preview, "--preview");
   const bool write_exr = !options.output.empty(), write_preview = !options.preview.empty();
-  const Pipeline pipeline(seq, options.gi);
+  const Pipeline pipeline(seq, options.gi, memory);
   const Plan& plan = pipeline.plan();
   for (const std::string& reason : plan.reasons) log_info("plan: " + reason);
 

@@ -2,6 +2,7 @@
 // composite.
 #pragma once
 
+#include <cstddef>
 #include <memory>
 #include <string>
 #include <vector>
@@ -35,11 +36,19 @@ struct FrameResult {
   Image composite;  // 4: direct + emission + gi on surfaces, the input beauty elsewhere
 };
 
+// What the pipeline may hold besides its frames' planes. It does not change the light.
+struct PipelineMemory {
+  // The Embree reference keeps, for the bounces after the first, the hits of as many rows as
+  // fit in this many bytes (4 per ray), and traces the other rows again for each bounce.
+  std::size_t reference_hits_bytes = std::size_t{1} << 30;
+};
+
 class Pipeline {
  public:
   // Loads what the whole run shares (the colour config and its processors, the environment
-  // map). Throws ssgi::Error.
-  Pipeline(const SequenceInfo& sequence, const GiSettings& settings);
+  // map); `memory` bounds what the reference keeps. Throws ssgi::Error.
+  Pipeline(const SequenceInfo& sequence, const GiSettings& settings,
+           const PipelineMemory& memory = {});
   ~Pipeline();
   Pipeline(const Pipeline&) = delete;
   Pipeline& operator=(const Pipeline&) = delete;

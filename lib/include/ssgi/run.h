@@ -8,6 +8,7 @@
 #include "ssgi/error.h"
 #include "ssgi/io.h"
 #include "ssgi/pipeline.h"
+#include "ssgi/memory.h"
 #include "ssgi/settings.h"
 
 namespace ssgi {
@@ -28,6 +29,9 @@ struct RunOptions {
   bool skip_existing = false;
   // --no-clobber: refuse the run, before any frame is computed, when it would overwrite a file.
   bool no_clobber = false;
+  // --max-memory, else the scheduler's (scheduler_memory_limit): a run whose estimated peak
+  // (estimate_run_memory) is over it is refused before anything is computed or written.
+  MemoryLimit memory_limit;
 };
 
 // What became of one frame.

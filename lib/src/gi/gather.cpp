@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "misses.h"
 #include "parallel.h"
 #include "surface_model.h"
 
@@ -136,27 +137,53 @@ WeightedHits weighted_from_rays(const TraceGrid& grid, const RayHits& rays) {
 
 namespace {
 
+// WeightedHits as a HitSource.
+class HeldHits final : public HitSource {
+ public:
+  HeldHits(const TraceGrid& grid, const WeightedHits& hits) : width_(grid.width), hits_(hits) {}
+  HitRow row(int by, HitScratch*) const override {
+    HitRow r;
+    r.begin = hits_.begin.data() + static_cast<std::size_t>(by) * width_;
+    r.pixel = hits_.pixel.data();
+    r.weight = hits_.weight.data();
+    return r;
+  }
+  const Image& miss() const override { return hits_.miss; }
+  const Image& env() const override { return hits_.env; }
+  const Image& cube() const override { return hits_.cube; }
+
+ private:
+  int width_;
+  const WeightedHits& hits_;
+};
+
 using CubeLight = std::array<std::array<float, 3>, kCubeFaces>;
 
 // One gather: the light `radiance(hit)` of every hit, plus the misses' environment light and
 // their cube shares x the cube's colours.
 template <typename Radiance>
-Image gather_once(const TraceGrid& grid, const WeightedHits& hits, const Radiance& radiance,
+Image gather_once(const TraceGrid& grid, const HitSource& hits, const Radiance& radiance,
                   const CubeLight& cube) {
   Image out(grid.width, grid.height, 3);
   parallel_for_rows(grid.height, [&](int by) {
+    HitScratch scratch;
+    const HitRow row = hits.row(by, &scratch);
+    const Image& env = hits.env();
+    const Image& shares = hits.cube();
     for (int bx = 0; bx < grid.width; ++bx) {
       const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
       if (grid.origin[s] < 0) continue;
       std::array<float, 3> sum;
-      for (int c = 0; c < 3; ++c) sum[c] = hits.env.plane(c)[s];
+      for (int c = 0; c < 3; ++c) sum[c] = env.plane(c)[s];
       for (int f = 0; f < kCubeFaces; ++f) {
-        const float share = hits.cube.plane(f)[s];
+        const float share = shares.plane(f)[s];
         for (int c = 0; c < 3; ++c) sum[c] += share * cube[f][c];
       }
-      for (std::uint32_t e = hits.begin[s]; e < hits.begin[s + 1]; ++e) {
-        const std::array<float, 3> l = radiance(hits.pixel[e]);
-        for (int c = 0; c < 3; ++c) sum[c] += hits.weight[e] * l[c];
+      const std::uint32_t first = row.begin[bx], end = row.begin[bx + 1];
+      for (std::uint32_t e = first; e < end; ++e) {
+        const std::array<float, 3> l = radiance(row.pixel[e]);
+        const float weight = row.weight ? row.weight[e] : row.uniform_weight;
+        for (int c = 0; c < 3; ++c) sum[c] += weight * l[c];
       }
       for (int c = 0; c < 3; ++c) out.plane(c)[s] = sum[c];
     }
@@ -167,6 +194,11 @@ Image gather_once(const TraceGrid& grid, const WeightedHits& hits, const Radianc
 }  // namespace
 
 Image gather_bounces(const TraceGrid& grid, const WeightedHits& hits, int bounces,
+                     const MissModel& misses) {
+  return gather_bounces(grid, HeldHits(grid, hits), bounces, misses);
+}
+
+Image gather_bounces(const TraceGrid& grid, const HitSource& hits, int bounces,
                      const MissModel& misses) {
   // Each bounce's light per trace sample, packed RGB_ so that a hit is one 16-byte load: at 2 s
   // the light of its front (what it reflects plus albedo x its indirect light), at 2 s + 1 that

@@ -52,11 +52,44 @@ struct WeightedHits {
 // The march's or the reference's rays as weighted hits (scale 1): each ray 1/rays.
 WeightedHits weighted_from_rays(const TraceGrid& grid, const RayHits& rays);
 
+// One row of trace samples' hits as a gather reads them: sample bx's entries are
+// [begin[bx], begin[bx + 1]) of `pixel` and of `weight`, or each weighs `uniform_weight` when
+// `weight` is null.
+struct HitRow {
+  const std::uint32_t* begin = nullptr;
+  const std::int32_t* pixel = nullptr;
+  const float* weight = nullptr;
+  float uniform_weight = 0;
+};
+
+// Storage a HitSource may fill with a row's hits and point its HitRow into.
+struct HitScratch {
+  std::vector<std::uint32_t> begin;
+  std::vector<std::int32_t> pixel;
+};
+
+// Where the bounce loop finds each row's hits: held in memory (WeightedHits), or traced again
+// for each bounce (the reference beyond its memory budget, reference.h).
+class HitSource {
+ public:
+  virtual ~HitSource() = default;
+  // Row `by`'s hits, valid while `scratch` is. Called once per row and bounce, rows in parallel.
+  virtual HitRow row(int by, HitScratch* scratch) const = 0;
+  // Per trace sample, the share that met nothing (1 channel), the environment light of those
+  // directions (3 channels) and their shares of the miss model's cube (kCubeFaces channels); a
+  // row's are there once row() has returned it.
+  virtual const Image& miss() const = 0;
+  virtual const Image& env() const = 0;
+  virtual const Image& cube() const = 0;
+};
+
 // Indirect light at the trace grid after `bounces` gathers over `hits`: a hit brings its
 // sample's reflected light plus, from the second bounce on, its albedo x the indirect light it
 // gathered in the bounce before (a hit from behind only the latter: surface_model.h); the missed
 // share brings its environment light plus its cube shares x the cube colours `misses` finds at
 // that bounce (misses.h). 0 where the grid has no origin.
+Image gather_bounces(const TraceGrid& grid, const HitSource& hits, int bounces,
+                     const MissModel& misses);
 Image gather_bounces(const TraceGrid& grid, const WeightedHits& hits, int bounces,
                      const MissModel& misses);
 

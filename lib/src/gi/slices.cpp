@@ -244,6 +244,9 @@ struct SliceTracer {
     const float to_grid = 1.0f / static_cast<float>(grid.scale);
     const V3 origin = z0 * ray((x + 0.5f) * to_grid, (y + 0.5f) * to_grid) + offset * n;
     const V3 view = normalized(-1.0f * origin);
+    // A point floats cannot hold (a depth near FLT_MAX; found by fuzzing) brings no light, rather
+    // than NaN angles indexing the azimuth table.
+    if (!std::isfinite(view.x + view.y + view.z)) return;
     // Azimuths around the view vector are measured from the normal's own (basis_x), so that
     // the slices can be drawn with the density of their weight (SliceAzimuths).
     const float nv_pixel = std::clamp(dot(n, view), 0.0f, 1.0f);

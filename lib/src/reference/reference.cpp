@@ -368,24 +368,25 @@ class ReferenceTracer {
   SlabScene scene_;
 };
 
-// Traces pixel (x, y)'s rays into its slice of `hits`: the march's rays (PixelRays).
+// Pixel (x, y)'s rays (the march's, PixelRays): the pixel each one's light comes from, -1 for
+// a miss, into hit[0, rays); the number of misses and the sums of what `misses` gives them, in
+// ray order, into *missed, env[3] and cube[kCubeFaces].
 void trace_pixel(const GBuffer& g, const GiSettings& settings, const ReferenceTracer& tracer,
-                 const MissModel& misses, int x, int y, RayHits* hits) {
+                 const MissModel& misses, int x, int y, std::int32_t* hit, int* missed,
+                 float env[3], float cube[kCubeFaces]) {
   const PixelRays rays(g, settings, x, y);
-  const std::size_t pixel = static_cast<std::size_t>(y) * g.width() + x;
-  std::int32_t* out = &hits->hit[pixel * hits->rays];
-  float env[3] = {0, 0, 0}, cube[kCubeFaces] = {0, 0, 0, 0, 0, 0};
-  int missed = 0;
-  for (int k = 0; k < hits->rays; ++k) {
+  std::fill(env, env + 3, 0.0f);
+  std::fill(cube, cube + kCubeFaces, 0.0f);
+  *missed = 0;
+  for (int k = 0; k < settings.rays; ++k) {
     float jitter;  // the march's; Embree needs none
     const Vec3f d = rays.direction(k, &jitter);
-    const int hit = tracer.trace(rays.origin(), d, x, y);
-    out[k] = hit >= 0 ? mark_hit(g, hit, rays.origin()) : hit;
-    if (hit >= 0) continue;
-    ++missed;
+    const int end = tracer.trace(rays.origin(), d, x, y);
+    hit[k] = end >= 0 ? mark_hit(g, end, rays.origin()) : end;
+    if (end >= 0) continue;
+    ++*missed;
     misses.add(d, 1.0f, env, cube);
   }
-  hits->store_misses(pixel, missed, env, cube);
 }
 
 }  // namespace
@@ -395,10 +396,107 @@ RayHits trace_reference(const GBuffer& g, const GiSettings& settings, const Miss
   const int w = g.width(), h = g.height();
   RayHits hits(g, settings.rays);
   parallel_for_rows(h, [&](int y) {
-    for (int x = 0; x < w; ++x)
-      if (g.is_surface(x, y)) trace_pixel(g, settings, tracer, misses, x, y, &hits);
+    for (int x = 0; x < w; ++x) {
+      if (!g.is_surface(x, y)) continue;
+      const std::size_t pixel = static_cast<std::size_t>(y) * w + x;
+      int missed;
+      float env[3], cube[kCubeFaces];
+      trace_pixel(g, settings, tracer, misses, x, y, &hits.hit[pixel * hits.rays], &missed, env,
+                  cube);
+      hits.store_misses(pixel, missed, env, cube);
+    }
   });
   return hits;
 }
+
+struct ReferenceHits::Impl {
+  Impl(const GBuffer& g, const GiSettings& settings, const MissModel& misses)
+      : g(g),
+        settings(settings),
+        tracer(g, settings, SurfaceModel{static_cast<float>(settings.thickness)}),
+        misses(misses) {}
+
+  // Row y's hits into `begin` (width + 1 offsets) and `pixel`, as weighted_from_rays packs
+  // them; its miss shares, environment light and cube shares into miss, env and cube.
+  void trace_row(int y, std::vector<std::uint32_t>* begin, std::vector<std::int32_t>* pixel) {
+    const int w = g.width();
+    const float inv = 1.0f / static_cast<float>(settings.rays);
+    std::vector<std::int32_t> rays(settings.rays);
+    begin->resize(w + 1);
+    pixel->clear();
+    for (int x = 0; x < w; ++x) {
+      (*begin)[x] = static_cast<std::uint32_t>(pixel->size());
+      if (!g.is_surface(x, y)) continue;
+      int missed;
+      float env_sum[3], cube_sum[kCubeFaces];
+      trace_pixel(g, settings, tracer, misses, x, y, rays.data(), &missed, env_sum, cube_sum);
+      for (const std::int32_t hit : rays)
+        if (hit >= 0) pixel->push_back(hit);
+      const std::size_t p = static_cast<std::size_t>(y) * w + x;
+      miss.plane(0)[p] = static_cast<float>(missed) * inv;
+      for (int ch = 0; ch < 3; ++ch) env.plane(ch)[p] = env_sum[ch] * inv;
+      for (int f = 0; f < kCubeFaces; ++f) cube.plane(f)[p] = cube_sum[f] * inv;
+    }
+    (*begin)[w] = static_cast<std::uint32_t>(pixel->size());
+  }
+
+  const GBuffer& g;
+  const GiSettings& settings;
+  const ReferenceTracer tracer;
+  const MissModel& misses;
+  Image miss, env, cube;
+  int kept_rows = 0;  // rows [0, kept_rows) keep their hits once traced
+  struct Row {
+    bool traced = false;
+    std::vector<std::uint32_t> begin;
+    std::vector<std::int32_t> pixel;
+  };
+  std::vector<Row> rows;
+};
+
+std::size_t ReferenceHits::row_bytes(int width, int rays) {
+  return static_cast<std::size_t>(width) * rays * sizeof(std::int32_t) +
+         (static_cast<std::size_t>(width) + 1) * sizeof(std::uint32_t);
+}
+
+ReferenceHits::ReferenceHits(const GBuffer& g, const GiSettings& settings,
+                             const MissModel& misses, std::size_t budget_bytes)
+    : impl_(std::make_unique<Impl>(g, settings, misses)) {
+  const int w = g.width(), h = g.height();
+  impl_->miss = Image(w, h, 1);
+  impl_->env = Image(w, h, 3);
+  impl_->cube = Image(w, h, kCubeFaces);
+  impl_->rows.resize(h);
+  // A single bounce reads each row once: nothing to keep.
+  if (settings.bounces > 1)
+    impl_->kept_rows = static_cast<int>(
+        std::min<std::size_t>(h, budget_bytes / row_bytes(w, std::max(1, settings.rays))));
+}
+
+ReferenceHits::~ReferenceHits() = default;
+
+HitRow ReferenceHits::row(int by, HitScratch* scratch) const {
+  Impl::Row& kept = impl_->rows[by];
+  HitRow r;
+  r.uniform_weight = 1.0f / static_cast<float>(impl_->settings.rays);
+  if (by < impl_->kept_rows) {
+    if (!kept.traced) impl_->trace_row(by, &kept.begin, &kept.pixel);
+    kept.traced = true;
+    r.begin = kept.begin.data();
+    r.pixel = kept.pixel.data();
+    return r;
+  }
+  // Traced again for each bounce: the same rays meet the same pixels. The first tracing also
+  // set the row's miss shares, environment light and cube shares, which tracing again rewrites
+  // unchanged.
+  impl_->trace_row(by, &scratch->begin, &scratch->pixel);
+  r.begin = scratch->begin.data();
+  r.pixel = scratch->pixel.data();
+  return r;
+}
+
+const Image& ReferenceHits::miss() const { return impl_->miss; }
+const Image& ReferenceHits::env() const { return impl_->env; }
+const Image& ReferenceHits::cube() const { return impl_->cube; }
 
 }  // namespace ssgi::detail

@@ -16,7 +16,11 @@
 // vertex of the triangle with the largest screen-space barycentric weight.
 #pragma once
 
+#include <cstddef>
+#include <memory>
+
 #include "environment.h"
+#include "gather.h"
 #include "march.h"
 #include "ssgi/gbuffer.h"
 #include "ssgi/settings.h"
@@ -28,8 +32,33 @@ namespace ssgi::detail {
 // the march's: the same origins and the same cosine-weighted directions from the pixel's
 // rotated R2 set (directions.h), so ray k of the reference is ray k of the march. MissMode::kExtend
 // has no meaning here (there is no screen edge beyond which to extend a surface): its model sends
-// every miss to the environment, as with kEnvironment. The result is the
-// same for any thread count. Throws Error(kInternal) when Embree fails.
+// every miss to the environment, as with kEnvironment. The result is the same for any thread
+// count. Throws Error(kInternal) when Embree fails.
 RayHits trace_reference(const GBuffer& g, const GiSettings& settings, const MissModel& misses);
+
+// The same rays' hits for the bounce loop (gather.h, at trace scale 1), in bounded memory: a
+// row is traced when the first bounce gathers it; the first rows whose hits fit in
+// `budget_bytes` keep them for the later bounces, the others are traced again for each. The
+// same rays meet the same pixels, so the light does not depend on the budget, only the time:
+// a tracing per bounce for the rows not kept. Besides the kept hits it holds the Embree scene
+// and 16 bytes per pixel. Throws Error(kInternal) when Embree fails.
+class ReferenceHits final : public HitSource {
+ public:
+  // `misses` must outlive it.
+  ReferenceHits(const GBuffer& g, const GiSettings& settings, const MissModel& misses,
+                std::size_t budget_bytes);
+  ~ReferenceHits() override;
+  HitRow row(int by, HitScratch* scratch) const override;
+  const Image& miss() const override;
+  const Image& env() const override;
+  const Image& cube() const override;
+
+  // The most a row's kept hits take: 4 bytes per ray, 4 per pixel.
+  static std::size_t row_bytes(int width, int rays);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 }  // namespace ssgi::detail

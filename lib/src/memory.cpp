@@ -1,0 +1,240 @@
+// A run's memory limit, from --max-memory or the scheduler, and the estimate of its peak.
+#include "ssgi/memory.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+#include "reference.h"
+#include "ssgi/error.h"
+
+namespace ssgi {
+namespace {
+
+constexpr std::uint64_t kMiB = std::uint64_t{1} << 20;
+
+// Larger than any machine: cgroup v1 writes 2^63 rounded down to a page for "no limit".
+constexpr std::uint64_t kUnlimited = std::uint64_t{1} << 60;
+
+// A whole number of bytes from a cgroup file ("max" or unreadable: 0).
+std::uint64_t cgroup_bytes(const std::string& path) {
+  std::ifstream in(path);
+  std::string text;
+  if (!(in >> text) || text == "max") return 0;
+  errno = 0;
+  char* end = nullptr;
+  const unsigned long long v = std::strtoull(text.c_str(), &end, 10);
+  if (errno != 0 || *end != '\0' || v == 0 || v >= kUnlimited) return 0;
+  return v;
+}
+
+// A positive whole number from the environment, else 0.
+std::uint64_t positive_env(const MemoryLimitSources& sources, const char* name) {
+  const char* text = sources.getenv(name);
+  if (text == nullptr || *text == '\0') return 0;
+  errno = 0;
+  char* end = nullptr;
+  const unsigned long long v = std::strtoull(text, &end, 10);
+  // Slurm may append a unit letter to memory values in some versions ("4000M").
+  std::uint64_t scale = 1;
+  if (*end == 'M' || *end == 'm')
+    ++end;
+  else if (*end == 'G' || *end == 'g')
+    scale = 1024, ++end;
+  return errno == 0 && *end == '\0' && v > 0 && v < kUnlimited / kMiB ? v * scale : 0;
+}
+
+// The smaller of two limits, 0 meaning none.
+void keep_smaller(MemoryLimit* best, std::uint64_t bytes, const std::string& source) {
+  if (bytes == 0) return;
+  if (best->bytes == 0 || bytes < best->bytes) *best = {bytes, source};
+}
+
+// This process's cgroup path from /proc/self/cgroup: the v2 line "0::/path", or for v1 the
+// line of the memory controller "N:...memory...:/path". Empty when not found.
+std::string own_cgroup(const std::string& self_cgroup, bool v2) {
+  std::ifstream in(self_cgroup);
+  std::string line;
+  while (std::getline(in, line)) {
+    const auto a = line.find(':'), b = line.find(':', a + 1);
+    if (a == std::string::npos || b == std::string::npos) continue;
+    const std::string controllers = line.substr(a + 1, b - a - 1);
+    const bool match = v2 ? line.compare(0, a, "0") == 0 && controllers.empty()
+                          : ("," + controllers + ",").find(",memory,") != std::string::npos;
+    if (match) return line.substr(b + 1);
+  }
+  return {};
+}
+
+// The limit in `file_name` of the cgroup `path` under `root` and of each of its ancestors up to
+// the root (the smallest holds). The root is looked at also when /proc/self/cgroup names no
+// cgroup: inside a container the namespace's root is the container's cgroup.
+void limits_up_the_tree(const std::string& root, std::string path, const char* file_name,
+                        const std::string& kind, MemoryLimit* best) {
+  while (!path.empty() && path.back() == '/') path.pop_back();
+  while (true) {
+    const std::string file = root + path + "/" + file_name;
+    keep_smaller(best, cgroup_bytes(file), kind + " " + file_name + " (" + file + ")");
+    if (path.empty()) break;
+    const auto slash = path.find_last_of('/');
+    path.resize(slash == std::string::npos ? 0 : slash);
+  }
+}
+
+void cgroup_limits(const MemoryLimitSources& sources, MemoryLimit* best) {
+  limits_up_the_tree(sources.cgroup_root, own_cgroup(sources.self_cgroup, true), "memory.max",
+                     "cgroup v2", best);
+  limits_up_the_tree(sources.cgroup_root + "/memory", own_cgroup(sources.self_cgroup, false),
+                     "memory.limit_in_bytes", "cgroup v1", best);
+}
+
+// Bytes of `planes` float planes of `pixels`.
+std::uint64_t planes(double count, std::uint64_t pixels) {
+  return static_cast<std::uint64_t>(std::ceil(count * 4.0 * static_cast<double>(pixels)));
+}
+
+}  // namespace
+
+std::uint64_t parse_memory_size(const std::string& text) {
+  const auto bad = [&]() {
+    throw_usage("--max-memory: '" + text + "' is not a size (e.g. 500M, 2G or bytes)");
+  };
+  errno = 0;
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (errno != 0 || end == text.c_str() || !std::isfinite(v) || !(v > 0) || text[0] == '-' ||
+      text[0] == '+' || !std::isdigit(static_cast<unsigned char>(text[0])))
+    bad();
+  std::string unit(end);
+  for (char& c : unit) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  if (!unit.empty() && unit.back() == 'B') unit.pop_back();     // "MB", "B"
+  if (unit.size() == 2 && unit.back() == 'I') unit.pop_back();  // "MiB"
+  const std::string units = "KMGT";
+  if (unit.size() > 1 || (unit.size() == 1 && units.find(unit[0]) == std::string::npos)) bad();
+  double scale = 1;
+  if (unit.size() == 1)
+    for (std::size_t k = 0; k <= units.find(unit[0]); ++k) scale *= 1024;
+  const double bytes = v * scale;
+  if (bytes < 1 || bytes >= static_cast<double>(kUnlimited)) bad();
+  return static_cast<std::uint64_t>(bytes);
+}
+
+std::string memory_size_text(std::uint64_t bytes) {
+  const char* units[] = {"B", "KiB", "MiB", "GiB", "TiB"};
+  double v = static_cast<double>(bytes);
+  int u = 0;
+  while (v >= 1024 && u < 4) v /= 1024, ++u;
+  char text[32];
+  if (u == 0 || v >= 100)
+    std::snprintf(text, sizeof text, "%.0f %s", v, units[u]);
+  else
+    std::snprintf(text, sizeof text, "%.3g %s", v, units[u]);
+  return text;
+}
+
+MemoryLimit scheduler_memory_limit(const MemoryLimitSources& sources) {
+  MemoryLimit best;
+  if (const std::uint64_t node = positive_env(sources, "SLURM_MEM_PER_NODE"))
+    keep_smaller(&best, node * kMiB, "SLURM_MEM_PER_NODE");
+  if (const std::uint64_t per_cpu = positive_env(sources, "SLURM_MEM_PER_CPU")) {
+    const char* cpus_text = sources.getenv("SLURM_CPUS_PER_TASK");
+    const long cpus = cpus_text ? std::max(1L, std::atol(cpus_text)) : 1L;
+    keep_smaller(&best, per_cpu * kMiB * static_cast<std::uint64_t>(cpus),
+                 "SLURM_MEM_PER_CPU x " + std::to_string(cpus) + " CPUs");
+  }
+  cgroup_limits(sources, &best);
+  return best;
+}
+
+MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, const GiSettings& s,
+                                   const WriteOptions& write, int threads,
+                                   const PipelineMemory& memory) {
+  const int w = seq.data_window.width(), h = seq.data_window.height();
+  const std::uint64_t pixels = static_cast<std::uint64_t>(w) * h;
+  const int scale = std::max(1, plan.trace_scale);
+  const std::uint64_t grid = static_cast<std::uint64_t>((w + scale - 1) / scale) *
+                             static_cast<std::uint64_t>((h + scale - 1) / scale);
+  threads = std::max(1, threads);
+
+  // A frame as read: the planes of the roles the plan reads (motion both ways), and OIIO's
+  // buffer of the channels while they are converted.
+  double read = 0;
+  for (int r = 0; r < kRoleCount; ++r) {
+    const Role role = static_cast<Role>(r);
+    if (!(plan.roles & role_bit(role))) continue;
+    read += role == Role::kMotion ? 4 : static_cast<double>(seq.layout.channels(role).size());
+  }
+  const std::uint64_t frame = planes(read, pixels);
+  // On the trace grid, what the temporal stage keeps of a frame: its light (3), depth, normal
+  // and motion (8).
+  const std::uint64_t frame_grid = planes(11, grid);
+  std::uint64_t ring_frames = 1;
+  if (plan.temporal == TemporalMode::kWindow) ring_frames = 2 * s.temporal_radius + 1;
+  if (plan.temporal == TemporalMode::kEma) ring_frames = 2;
+  const std::uint64_t ring = ring_frames * (frame + frame_grid);
+
+  // Tracing: the reflected light and the trace grid (10 planes and origins), the tracer's
+  // hits, then the bounces' light (4 + 3 + 3 planes).
+  std::uint64_t tracer = 0;
+  switch (s.tracer) {
+    case Tracer::kSlices:  // at most 32 sectors a slice, each hit 8 bytes, and 20 per sample
+      tracer = grid * (static_cast<std::uint64_t>(s.slices) * 32 * 8 + 20);
+      break;
+    case Tracer::kScreenSpace:  // every ray's end (4), then as weighted hits (8)
+      tracer = pixels * (static_cast<std::uint64_t>(s.rays) * 12 + 20);
+      break;
+    case Tracer::kReference: {
+      // The Embree scene: vertices, faces (kept while the BVH is built) and the BVH itself,
+      // bounded at 400 bytes a pixel (tests/bench/memory.sh); the kept hits; per worker a
+      // row of hits being traced again.
+      const std::uint64_t row = detail::ReferenceHits::row_bytes(w, s.rays);
+      const std::uint64_t kept =
+          s.bounces > 1 ? std::min<std::uint64_t>(memory.reference_hits_bytes / row, h) * row : 0;
+      tracer = pixels * (400 + 16) + kept + static_cast<std::uint64_t>(threads) * 2 * row;
+      break;
+    }
+  }
+  const std::uint64_t tracing = planes(3, pixels) + planes(11, grid) + tracer + planes(10, grid);
+  // The denoiser's pyramid and guides at full resolution, and the composite's three layers
+  // (indirect, gi, composite: 10 planes) beside the frame's light.
+  const std::uint64_t denoise = plan.denoise || scale > 1 ? planes(24, pixels) : 0;
+  const std::uint64_t composite = planes(13, pixels);
+  // The writer: the output's channels, and with passthrough the input's decoded again.
+  std::uint64_t input_channels = 0;
+  for (const auto& c : seq.channels.channels) input_channels += c.size();
+  const std::uint64_t writer =
+      planes(10, pixels) + (write.passthrough ? planes(2.0 * input_channels, pixels) : 0);
+  // The program, its libraries and the allocator's pools; per worker its stack and buffers.
+  const std::uint64_t program = 120 * kMiB + static_cast<std::uint64_t>(threads) * 16 * kMiB;
+
+  MemoryEstimate e;
+  // The phases of a frame follow one another, but the allocator keeps what each freed, so the
+  // bound adds them.
+  e.bytes = program + ring + frame + tracing + denoise + composite + writer;
+  e.parts = "frames " + memory_size_text(ring + frame) + " (" + std::to_string(ring_frames) +
+            " kept), tracing " + memory_size_text(tracing) + ", denoise and composite " +
+            memory_size_text(denoise + composite) + ", writing " + memory_size_text(writer) +
+            ", program " + memory_size_text(program);
+  return e;
+}
+
+PipelineMemory pipeline_memory_within(const MemoryLimit& limit, const SequenceInfo& seq,
+                                      const Plan& plan, const GiSettings& s,
+                                      const WriteOptions& write, int threads) {
+  PipelineMemory memory;
+  if (limit.bytes == 0 || s.tracer != Tracer::kReference) return memory;
+  PipelineMemory none;
+  none.reference_hits_bytes = 0;
+  const std::uint64_t rest = estimate_run_memory(seq, plan, s, write, threads, none).bytes;
+  memory.reference_hits_bytes = static_cast<std::size_t>(std::min<std::uint64_t>(
+      memory.reference_hits_bytes, limit.bytes > rest ? limit.bytes - rest : 0));
+  return memory;
+}
+
+}  // namespace ssgi
