@@ -273,10 +273,10 @@ std::int32_t mark_hit(const GBuffer& g, std::int32_t hit, const Vec3f& origin) {
   const Vec3d p =
       g.camera.unproject(x + g.data_window.x0 - g.display_window.x0 + 0.5,
                          y + g.data_window.y0 - g.display_window.y0 + 0.5, g.depth.plane(0)[hit]);
-  const double behind = (origin.x - p.x) * g.normal.plane(0)[hit] +
-                        (origin.y - p.y) * g.normal.plane(1)[hit] +
-                        (origin.z - p.z) * g.normal.plane(2)[hit];
-  return mark_side(hit, behind < 0);
+  const double in_front = (origin.x - p.x) * g.normal.plane(0)[hit] +
+                          (origin.y - p.y) * g.normal.plane(1)[hit] +
+                          (origin.z - p.z) * g.normal.plane(2)[hit];
+  return mark_side(hit, in_front < -kBehindTolerance * p.z);
 }
 
 PixelRays::PixelRays(const GBuffer& g, const GiSettings& settings, int x, int y) {

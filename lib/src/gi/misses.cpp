@@ -128,12 +128,13 @@ MissModel::MissModel(const GBuffer& g, MissMode mode, const Environment& env)
     seen_[k] = static_cast<int>(count[k]);
     share[k] = count[k] > 0 ? sky[k] / count[k] : 0;
   }
-  // A direction is enclosed as far as the frame's border surfaces face it: fully from half an
-  // average face's weight (the faces' weights sum to border_total). Behind the camera no surface
+  // A direction is enclosed as far as the frame's border surfaces face it: fully from three
+  // quarters of an average face's weight (the faces' weights sum to border_total; the fraction
+  // chosen on the training set, tests/accuracy/training.sh). Behind the camera no surface
   // the frame shows can face: the mean of the two sides stands in for it.
   for (int f = 0; f < kCubeFaces; ++f)
     enclosed_[f] = border_total > 0
-                       ? static_cast<float>(std::min(1.0, facing[f] / (0.5 * border_total / 6)))
+                       ? static_cast<float>(std::min(1.0, facing[f] / (0.75 * border_total / 6)))
                        : 0.0f;
   enclosed_[5] = std::max(enclosed_[5], 0.5f * (enclosed_[0] + enclosed_[1]));
   switch (mode) {

@@ -162,7 +162,8 @@ int MarchSide(const MeshView& mesh, const SliceFrame& f, const SideMarch& m, Sid
     const std::size_t at = static_cast<std::size_t>(j) + 1;
     const VF wx = hn::Sub(x, ox), wy = hn::Sub(y, oy), wz = hn::Sub(z, oz);
     // Seen from behind (surface_model.h): the origin is behind the vertex's tangent plane,
-    // n . o < n . p with p = r / h the vertex's point (r its ray at z = 1, h its 1/z).
+    // n . o < n . p - tolerance x z with p = r / h the vertex's point (r its ray at z = 1, h its
+    // 1/z, z = 1/h), i.e. h n . o < n . r - tolerance.
     const VF half = hn::Set(d, 0.5f);
     const VF vx = hn::IfThenElse(
         hn::RebindMask(d, pick_a), fi,
@@ -176,7 +177,8 @@ int MarchSide(const MeshView& mesh, const SliceFrame& f, const SideMarch& m, Sid
     const VF ry = hn::Mul(hn::Sub(hn::Set(d, m.cy), hn::Add(vy, half)), hn::Set(d, m.inv_fy));
     const VF n_dot_o = hn::Add(hn::Add(hn::Mul(nx, ox), hn::Mul(ny, oy)), hn::Mul(nz, oz));
     const VF n_dot_r = hn::Add(hn::Add(hn::Mul(nx, rx), hn::Mul(ny, ry)), nz);
-    const auto behind = hn::RebindMask(di, hn::Lt(hn::Mul(hv, n_dot_o), n_dot_r));
+    const auto behind = hn::RebindMask(
+        di, hn::Lt(hn::Mul(hv, n_dot_o), hn::Sub(n_dot_r, hn::Set(d, kBehindTolerance))));
     const VI marked = hn::IfThenElse(behind, hn::Or(pixel, hn::Set(di, kSeenFromBehind)), pixel);
     hn::StoreU(hn::IfThenElse(valid_i, marked, hn::Set(di, -1)), di, out->pixel.data() + at);
     hn::StoreU(x, d, out->x.data() + at);
@@ -305,7 +307,7 @@ int march_side_scalar(const MeshView& mesh, const SliceFrame& f, const SideMarch
     const float rx = ((vx + 0.5f) - m.cx) * m.inv_fx, ry = (m.cy - (vy + 0.5f)) * m.inv_fy;
     const float n_dot_o = (n[0] * f.ox + n[1] * f.oy) + n[2] * f.oz;
     const float n_dot_r = (n[0] * rx + n[1] * ry) + n[2];
-    const bool behind = hv * n_dot_o < n_dot_r;
+    const bool behind = hv * n_dot_o < n_dot_r - kBehindTolerance;
     const float x = z * ((px - m.cx) * m.inv_fx), y = z * ((m.cy - py) * m.inv_fy);
     const float wx = x - f.ox, wy = y - f.oy, wz = z - f.oz;
     if (m.max_distance2 > 0 && wx * wx + wy * wy + wz * wz > m.max_distance2) {

@@ -14,7 +14,9 @@
 //
 // A ray that meets a surface from behind sees the surface's unseen back, not the lit front the
 // frame shows: it does when its origin lies behind the tangent plane of the vertex whose light
-// it brings (the plane through the vertex's point across its normal). It then brings the light
+// it brings (the plane through the vertex's point across its normal) by more than
+// kBehindTolerance x the vertex's depth (an origin on a crease lies on both faces' planes). It
+// then brings the light
 // of that vertex's back: its albedo x the indirect light it gathered in the bounce before (its
 // direct light and emission belong to the front), and nothing in the first bounce. The tracers
 // mark such hits with kSeenFromBehind in the hit's index. (The hit triangle's own plane would
@@ -32,6 +34,7 @@ namespace ssgi::detail {
 
 // Set in a hit's pixel index when the ray meets that surface from behind (see above).
 constexpr std::int32_t kSeenFromBehind = std::int32_t{1} << 30;
+constexpr float kBehindTolerance = 1e-3f;
 
 // `pixel`, marked kSeenFromBehind when `behind`.
 inline std::int32_t mark_side(std::int32_t pixel, bool behind) {

@@ -459,8 +459,8 @@ std::size_t ReferenceHits::row_bytes(int width, int rays) {
          (static_cast<std::size_t>(width) + 1) * sizeof(std::uint32_t);
 }
 
-ReferenceHits::ReferenceHits(const GBuffer& g, const GiSettings& settings,
-                             const MissModel& misses, std::size_t budget_bytes)
+ReferenceHits::ReferenceHits(const GBuffer& g, const GiSettings& settings, const MissModel& misses,
+                             std::size_t budget_bytes)
     : impl_(std::make_unique<Impl>(g, settings, misses)) {
   const int w = g.width(), h = g.height();
   impl_->miss = Image(w, h, 1);
