@@ -73,6 +73,8 @@ const std::vector<OptionSpec> kTable = {
      nullptr},
     {kDepthKind, "depth-kind", 0, "KIND", OptionGroup::kInput, kReading,
      "planar, radial, inverse or negative (default: the layout's)", nullptr},
+    {kNormals, "normals", 0, "SOURCE", OptionGroup::kInput, kReading,
+     "auto (the file's normals, else from depth), pass or depth (from the depth buffer)", nullptr},
     {kFov, "fov", 0, "DEGREES", OptionGroup::kInput, kReading,
      "a static camera with this horizontal field of view", nullptr},
     {kCamera, "camera", 0, "FILE.json", OptionGroup::kInput, kReading,

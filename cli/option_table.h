@@ -31,6 +31,7 @@ enum OptionId : int {
   kLayout,
   kChannel,
   kDepthKind,
+  kNormals,
   kFov,
   kCamera,
   kRays,

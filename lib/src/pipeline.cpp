@@ -65,7 +65,14 @@ Plan make_plan(const SequenceInfo& seq, const GiSettings& s) {
     plan.reasons.push_back(std::string("read ") + role_name(role) + ": " + why);
   };
   need(Role::kDepth, "the surfaces rays start from and hit");
-  need(Role::kNormal, "the hemisphere each pixel gathers over");
+  if (seq.normals_from_depth) {
+    plan.roles |= role_bit(Role::kNormal);
+    plan.reasons.push_back(
+        "normal: from the depth buffer's pixel derivatives (--normals depth, or the file has "
+        "none), the hemisphere each pixel gathers over");
+  } else {
+    need(Role::kNormal, "the hemisphere each pixel gathers over");
+  }
   if (!layout.has(Role::kDirect))
     throw_input(seq.pattern.path_for(seq.frames.front()),
                 "has no direct-light channels (give --channel direct=NAME)");
@@ -264,8 +271,7 @@ Image Pipeline::Impl::trace(const GBuffer& g, GBuffer* grid_out) const {
     case Tracer::kSlices:
       break;
   }
-  return detail::gather_bounces(grid, detail::trace_slices(g, grid, s, misses), s.bounces,
-                                misses);
+  return detail::gather_bounces(grid, detail::trace_slices(g, grid, s, misses), s.bounces, misses);
 }
 
 Pipeline::TracedLight Pipeline::trace_light(const GBuffer& g) const {

@@ -10,8 +10,8 @@
 #include <set>
 
 #include "frame_source.h"
-#include "preview.h"
 #include "parallel.h"
+#include "preview.h"
 #include "ssgi/log.h"
 #include "ssgi/pipeline.h"
 #include "ssgi/settings.h"
@@ -69,6 +69,7 @@ std::string settings_text(const RunOptions& o, const SequenceInfo& seq) {
   add("layout", seq.layout.preset.name);
   for (const std::string& c : o.input.channel_overrides) add("channel", c);
   if (!o.input.depth_kind.empty()) add("depth-kind", o.input.depth_kind);
+  add("normals", seq.normals_from_depth ? "depth" : "pass");
   if (o.input.camera.hfov_deg > 0) {
     char fov[32];
     std::snprintf(fov, sizeof fov, "%.17g", o.input.camera.hfov_deg);

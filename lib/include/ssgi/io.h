@@ -27,6 +27,9 @@ struct InputOptions {
   std::string layout;                          // --layout; empty: detect
   std::vector<std::string> channel_overrides;  // --channel ROLE=NAME
   std::string depth_kind;                      // --depth-kind; empty: the preset's
+  // --normals: "pass" (the file's normal channels), "depth" (from the depth buffer's pixel
+  // derivatives), empty or "auto" (the pass when the file has one, else from depth).
+  std::string normals;
   CameraOptions camera;                        // --fov, --camera
 };
 
@@ -40,6 +43,7 @@ struct SequenceInfo {
   FileChannels channels;  // of the first frame
   Layout layout;          // resolved against the first frame
   double pixel_aspect = 1.0;
+  bool normals_from_depth = false;  // --normals: the reader derives normals from depth
 };
 
 // Resolves frames and probes the first one. Throws Error(kUsage) for a malformed pattern or

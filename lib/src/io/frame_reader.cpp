@@ -11,6 +11,7 @@
 
 #include "camera_header.h"
 #include "oiio_files.h"
+#include "parallel.h"
 #include "ssgi/color.h"
 #include "ssgi/error.h"
 #include "ssgi/io.h"
@@ -253,6 +254,56 @@ void convert_normals(Image& normal, const Image& depth, NormalSpace space, const
   }
 }
 
+// Unit camera-space normals facing the camera from the depth buffer's pixel derivatives: the
+// camera-space points of the pixel and its neighbours; along each axis the one-sided difference
+// with the smaller depth step (so that a depth edge does not bend the normal of the surface on
+// either side), the other side where one is background; the normal across the two, turned to
+// face the camera. A pixel with no surface neighbour on an axis faces the camera.
+Image normals_from_depth(const Image& depth, const Camera& camera, const Box2i& display,
+                         const Box2i& data) {
+  const int w = depth.width(), h = depth.height();
+  Image normal(w, h, 3);
+  const double ox = data.x0 - display.x0 + 0.5, oy = data.y0 - display.y0 + 0.5;
+  auto point = [&](int x, int y, Vec3d* p) {
+    if (x < 0 || y < 0 || x >= w || y >= h) return false;
+    const float z = depth.at(0, x, y);
+    if (!std::isfinite(z)) return false;
+    *p = camera.unproject(x + ox, y + oy, z);
+    return true;
+  };
+  // The difference towards the neighbour with the smaller depth step; false when neither is a
+  // surface.
+  auto derivative = [&](const Vec3d& c, int x, int y, int dx, int dy, Vec3d* d) {
+    Vec3d a, b;
+    const bool has_a = point(x + dx, y + dy, &a), has_b = point(x - dx, y - dy, &b);
+    if (!has_a && !has_b) return false;
+    const bool use_a = has_a && (!has_b || std::fabs(a.z - c.z) <= std::fabs(c.z - b.z));
+    *d = use_a ? Vec3d{a.x - c.x, a.y - c.y, a.z - c.z} : Vec3d{c.x - b.x, c.y - b.y, c.z - b.z};
+    return true;
+  };
+  detail::parallel_for_rows(h, [&](int y) {
+    for (int x = 0; x < w; ++x) {
+      Vec3d c;
+      if (!point(x, y, &c)) continue;
+      const Vec3d view = camera.view_dir(x + ox, y + oy);
+      Vec3d n{-view.x, -view.y, -view.z}, du, dv;
+      if (derivative(c, x, y, 1, 0, &du) && derivative(c, x, y, 0, 1, &dv)) {
+        const Vec3d cr{du.y * dv.z - du.z * dv.y, du.z * dv.x - du.x * dv.z,
+                       du.x * dv.y - du.y * dv.x};
+        const double len = std::sqrt(cr.x * cr.x + cr.y * cr.y + cr.z * cr.z);
+        if (len > 0 && std::isfinite(len)) {
+          n = {cr.x / len, cr.y / len, cr.z / len};
+          if (n.x * view.x + n.y * view.y + n.z * view.z > 0) n = {-n.x, -n.y, -n.z};
+        }
+      }
+      normal.at(0, x, y) = static_cast<float>(n.x);
+      normal.at(1, x, y) = static_cast<float>(n.y);
+      normal.at(2, x, y) = static_cast<float>(n.z);
+    }
+  });
+  return normal;
+}
+
 // Motion in the library's convention: display pixels, +y down, offsets to frame -1 and +1.
 void convert_motion(const std::vector<std::vector<float>>& planes, const MotionConvention& mc,
                     const Box2i& display, int w, int h, GBuffer* g) {
@@ -366,7 +417,16 @@ SequenceInfo open_sequence(const InputOptions& options) {
                 "' (planar, radial, inverse, negative)");
   if (!options.camera.sidecar.empty() && options.camera.hfov_deg > 0)
     throw_usage("--camera and --fov both give the camera: use one");
-  if (seq.layout.preset.normal_space == NormalSpace::kWorld) {
+  if (!options.normals.empty() && options.normals != "auto" && options.normals != "pass" &&
+      options.normals != "depth")
+    throw_usage("unknown --normals '" + options.normals + "' (auto, pass, depth)");
+  if (options.normals == "pass" && !seq.layout.has(Role::kNormal))
+    throw_input(first,
+                "has no normal channels (--normals pass; give --channel normal=NAME, or "
+                "--normals depth)");
+  seq.normals_from_depth =
+      options.normals == "depth" || (options.normals != "pass" && !seq.layout.has(Role::kNormal));
+  if (seq.layout.preset.normal_space == NormalSpace::kWorld && !seq.normals_from_depth) {
     try {
       if (!find_camera(options, spec, seq.frames.front(), seq.display_window, seq.pixel_aspect,
                        first)
@@ -406,6 +466,7 @@ GBuffer read_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
   std::map<int, std::vector<std::string>> by_subimage;
   for (int r = 0; r < kRoleCount; ++r) {
     if (!(roles & role_bit(static_cast<Role>(r)))) continue;
+    if (static_cast<Role>(r) == Role::kNormal && seq.normals_from_depth) continue;
     for (const ChannelRef& c : seq.layout.roles[r]) by_subimage[c.subimage].push_back(c.name);
   }
   std::map<std::pair<int, std::string>, std::vector<float>> planes;
@@ -433,7 +494,9 @@ GBuffer read_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
                                              g.camera, g.display_window, g.data_window);
     warn_if_no_surfaces(counts, g.depth.plane_size(), preset.depth_kind, path);
   }
-  if (roles & role_bit(Role::kNormal)) {
+  if ((roles & role_bit(Role::kNormal)) && seq.normals_from_depth) {
+    g.normal = normals_from_depth(g.depth, g.camera, g.display_window, g.data_window);
+  } else if (roles & role_bit(Role::kNormal)) {
     if (!seq.layout.has(Role::kNormal)) throw_input(path, "has no normal channels");
     g.normal = to_image(role_planes(Role::kNormal), w, h, &non_finite);
     convert_normals(g.normal, g.depth, preset.normal_space, g.camera, g.display_window,
