@@ -51,6 +51,7 @@ struct Report {
   struct FrameCheck {
     int frame;
     std::string file, error;
+    std::string misses;  // what the miss model decides for it (read frames, a pipeline)
   };
   std::optional<std::vector<FrameCheck>> checks;
   std::string environment_error;
@@ -71,13 +72,17 @@ std::string error_text(const ssgi::Error& e) {
 // --check's findings: null without it.
 Json check_json(const Report& r) {
   if (!r.checks) return nullptr;
-  Json failed = Json::array();
-  for (const Report::FrameCheck& c : *r.checks)
+  Json failed = Json::array(), misses = Json::array();
+  for (const Report::FrameCheck& c : *r.checks) {
     if (!c.error.empty())
       failed.push_back({{"frame", c.frame}, {"file", c.file}, {"error", c.error}});
+    else if (!c.misses.empty())
+      misses.push_back({{"frame", c.frame}, {"misses", c.misses}});
+  }
   return {{"frames", r.checks->size()},
           {"read", r.checks->size() - failed.size()},
           {"failed", failed},
+          {"misses", misses},
           {"environment", r.environment_error.empty() ? Json("ok") : Json(r.environment_error)}};
 }
 
@@ -175,6 +180,8 @@ void print_text(const ssgi::InputOptions& in, const ssgi::SequenceInfo& seq, con
     for (const Report::FrameCheck& c : *r.checks)
       if (!c.error.empty())
         std::printf("  frame %-6d %s: %s\n", c.frame, c.file.c_str(), c.error.c_str());
+    for (const Report::FrameCheck& c : *r.checks)
+      if (!c.misses.empty()) std::printf("  frame %-6d %s\n", c.frame, c.misses.c_str());
     if (!r.environment_error.empty()) std::printf("  %s\n", r.environment_error.c_str());
   }
   std::printf("plan:\n");
@@ -252,7 +259,8 @@ int run_info(int argc, char** argv) {
     for (int f : seq.frames) {
       Report::FrameCheck c{f, seq.pattern.path_for(f), {}};
       try {
-        ssgi::read_gbuffer(seq, f, roles, in);
+        const ssgi::GBuffer g = ssgi::read_gbuffer(seq, f, roles, in);
+        if (pipeline) c.misses = pipeline->describe_misses(g);
       } catch (const ssgi::Error& e) {
         if (!e.file().empty()) c.file = e.file();
         c.error = e.what();

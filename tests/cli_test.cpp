@@ -1667,6 +1667,11 @@ TEST_F(Cli, InfoCheckDecodesEveryFrameAsRunWould) {
   EXPECT_EQ(ok.exit_code, 0) << ok.err;
   EXPECT_NE(ok.out.find("check:         6 of 6 frames read as run reads them\n"),
             std::string::npos);
+  // Each frame read says what the miss model decides for it (the room is enclosed all round).
+  EXPECT_NE(ok.out.find("  frame 6      misses (auto): up "), std::string::npos) << ok.out;
+  EXPECT_NE(ok.out.find("enclosed right left up down forward back: 1.00 1.00 1.00 1.00"),
+            std::string::npos)
+      << ok.out;
   // A sequence that cannot even be opened: --json still prints a document, the error.
   const CliResult none = run_ssgi({"info", path("nothing.####.exr"), "--json"});
   EXPECT_EQ(none.exit_code, 4);

@@ -304,6 +304,10 @@ Image Pipeline::indirect_light(const GBuffer& g) const {
                                       impl_->settings.denoise_settings, plan.denoise);
 }
 
+std::string Pipeline::describe_misses(const GBuffer& g) const {
+  return detail::MissModel(g, impl_->settings.miss, impl_->env).describe();
+}
+
 FrameResult Pipeline::composite(const GBuffer& g, Image indirect) const {
   return detail::composite_frame(g, std::move(indirect));
 }

@@ -75,6 +75,10 @@ class Pipeline {
   // filtering.
   Image indirect_light(const GBuffer& frame) const;
 
+  // What the miss model decides for `frame` (lib/src/gi/misses.h; man ssgi, MISSES) and the
+  // numbers it decides from, in one line: what -v prints per frame.
+  std::string describe_misses(const GBuffer& frame) const;
+
   // The composite stage: outputs from the (temporally filtered) indirect light.
   FrameResult composite(const GBuffer& frame, Image indirect) const;
 
