@@ -257,7 +257,7 @@ int run_info(int argc, char** argv) {
     }
     const ssgi::RoleMask roles = r.plan ? r.plan->roles : 0;
     for (int f : seq.frames) {
-      Report::FrameCheck c{f, seq.pattern.path_for(f), {}};
+      Report::FrameCheck c{f, seq.pattern.path_for(f), {}, {}};
       try {
         const ssgi::GBuffer g = ssgi::read_gbuffer(seq, f, roles, in);
         if (pipeline) c.misses = pipeline->describe_misses(g);

@@ -396,33 +396,50 @@ TEST(Pipeline, GrooveGivesTheViewFactorOfItsLitFace) {
   }
 }
 
+// Settings that take the tracers to their converged answer on a small analytic scene: every
+// pixel traced, many slices, rays and samples, no denoise, no temporal stage.
+GiSettings converged_settings() {
+  GiSettings s;
+  s.denoise = DenoiseMode::kNone;
+  s.temporal = TemporalMode::kNone;
+  s.trace_scale = 1;
+  s.slices = 16;
+  s.rays = 64;
+  s.max_steps = 64;
+  return s;
+}
+
+// The plane fixture's frame emptied for an analytic scene drawn into it: a centred camera of
+// `hfov` degrees (no world transform: camera space is world space), depth `depth`, no normals,
+// albedo 0.5, no light.
+Frame blank_scene(const GiSettings& settings, double hfov, float depth) {
+  Frame f = load("plane/plane.0001.exr", settings);
+  GBuffer& g = f.g;
+  const int w = g.width(), h = g.height();
+  g.camera = camera_from_fov(hfov, g.display_window);
+  g.depth = Image(w, h, 1, depth);
+  g.normal = Image(w, h, 3);
+  g.albedo = Image(w, h, 3, 0.5f);
+  g.direct = Image(w, h, 3);
+  if (!g.emission.empty()) g.emission = Image(w, h, 3);
+  return f;
+}
+
 // A lit panel in front of a backdrop, over a floor: the backdrop sees the panel's unlit back,
 // so the light of the panel's front never reaches it (surface_model.h), while the floor in front
 // of the panel gets it; from the second bounce the back brings the panel's albedo x its own
 // indirect light. Camera space is world space; misses bring the environment C.
 TEST(Pipeline, AHitFromBehindBringsTheBackNotTheLitFront) {
-  GiSettings base;
+  GiSettings base = converged_settings();
   base.miss = MissMode::kEnvironment;
   base.env_color = {0.5f, 0.5f, 0.5f};
-  base.denoise = DenoiseMode::kNone;
-  base.temporal = TemporalMode::kNone;
-  base.trace_scale = 1;
-  base.slices = 16;
-  base.rays = 64;
-  base.max_steps = 64;
-  Frame f = load("plane/plane.0001.exr", base);
+  Frame f = blank_scene(base, 60.0, 0.0f);
   GBuffer& g = f.g;
   const int w = g.width(), h = g.height();
-  g.camera = camera_from_fov(60.0, g.display_window);
   const Camera& cam = g.camera;
   enum Surface { kFloor, kPanel, kBackdrop };
   std::vector<Surface> what(static_cast<std::size_t>(w) * h);
   const double floor_y = -1.5, panel_z = 6, panel_top = 0.3, panel_x = 2, backdrop_z = 10;
-  g.depth = Image(w, h, 1);
-  g.normal = Image(w, h, 3);
-  g.albedo = Image(w, h, 3, 0.5f);
-  g.direct = Image(w, h, 3);
-  if (!g.emission.empty()) g.emission = Image(w, h, 3);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       const double rx = (x + 0.5 - cam.cx) / cam.fx, ry = (cam.cy - (y + 0.5)) / cam.fy;
@@ -520,16 +537,11 @@ TEST(Pipeline, TheMissModelClosesAClosedBox) {
   base.miss = MissMode::kAuto;
   base.denoise = DenoiseMode::kNone;
   base.temporal = TemporalMode::kNone;
-  Frame f = load("plane/plane.0001.exr", base);
+  Frame f = blank_scene(base, 120.0, 0.0f);  // 104 degrees down
   GBuffer& g = f.g;
   const int w = g.width(), h = g.height();
-  g.camera = camera_from_fov(120.0, g.display_window);  // 104 degrees down
   const Camera& cam = g.camera;
-  g.depth = Image(w, h, 1);
-  g.normal = Image(w, h, 3);
-  g.albedo = Image(w, h, 3, 0.5f);
   g.direct = Image(w, h, 3, 0.5f);  // this layout's direct light includes the albedo
-  if (!g.emission.empty()) g.emission = Image(w, h, 3);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       const double r[3] = {(x + 0.5 - cam.cx) / cam.fx, (cam.cy - (y + 0.5)) / cam.fy, 1.0};
@@ -559,26 +571,14 @@ TEST(Pipeline, TheMissModelClosesAClosedBox) {
 // (and forwards, by the wall): upward misses go to the (black) sky, downward ones meet the
 // ground, whose light the wall's rays that leave the frame's bottom edge bring back.
 TEST(Pipeline, AWallFacingTheCameraGetsTheGroundBehindTheCamera) {
-  GiSettings base;
+  GiSettings base = converged_settings();
   base.bounces = 1;
-  base.denoise = DenoiseMode::kNone;
-  base.temporal = TemporalMode::kNone;
-  base.trace_scale = 1;
-  base.slices = 16;
-  base.rays = 64;
-  base.max_steps = 64;
-  Frame f = load("plane/plane.0001.exr", base);
+  Frame f = blank_scene(base, 60.0, std::numeric_limits<float>::infinity());
   GBuffer& g = f.g;
   const int w = g.width(), h = g.height();
-  g.camera = camera_from_fov(60.0, g.display_window);
   const Camera& cam = g.camera;
   const double ground_y = -1.6, wall_z = 10, wall_top = 1.0;
   const float ground_light = 0.5f;  // reflected = 2 x this (direct includes albedo here)
-  g.depth = Image(w, h, 1, std::numeric_limits<float>::infinity());
-  g.normal = Image(w, h, 3);
-  g.albedo = Image(w, h, 3, 0.5f);
-  g.direct = Image(w, h, 3);
-  if (!g.emission.empty()) g.emission = Image(w, h, 3);
   std::vector<std::size_t> wall;
   std::vector<bool> what_ground(static_cast<std::size_t>(w) * h);
   for (int y = 0; y < h; ++y)

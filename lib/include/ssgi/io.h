@@ -30,7 +30,7 @@ struct InputOptions {
   // --normals: "pass" (the file's normal channels), "depth" (from the depth buffer's pixel
   // derivatives), empty or "auto" (the pass when the file has one, else from depth).
   std::string normals;
-  CameraOptions camera;                        // --fov, --camera
+  CameraOptions camera;  // --fov, --camera
 };
 
 // A sequence as found on disk, probed from its first frame.

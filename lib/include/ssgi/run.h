@@ -7,8 +7,8 @@
 
 #include "ssgi/error.h"
 #include "ssgi/io.h"
-#include "ssgi/pipeline.h"
 #include "ssgi/memory.h"
+#include "ssgi/pipeline.h"
 #include "ssgi/settings.h"
 
 namespace ssgi {

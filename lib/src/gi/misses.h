@@ -79,8 +79,6 @@ class MissModel {
   // The environment's light along camera-space direction `d` (world-space maps rotated).
   std::array<float, 3> environment(const Vec3f& d) const;
 
-  bool environment_is_black() const { return env_.is_black(); }
-
   // The cube's colours for one bounce: light[stride * s] is trace sample s's light (what it
   // reflects plus albedo x its indirect light; RGB and one unused float), over the samples with
   // an origin.

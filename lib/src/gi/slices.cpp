@@ -200,21 +200,23 @@ struct SliceTracer {
 
   // What the missed sectors of a slice bring (misses.h): the half-disc cut into kMissBins
   // equal angles, each bin's missed sectors (those whose coordinate falls in it) sent along the
-  // bin's middle direction. The angles' sines and cosines by rotation, not by libm.
-  void add_slice_misses(std::uint32_t missed, const SliceMeasure& measure, float lo_theta,
-                        float hi_theta, float h_lo, float to_sector, float u_rot, const V3& view,
-                        const V3& t, float sector_weight, float env_light[3],
-                        float cube[kCubeFaces]) const {
+  // bin's middle direction. The angles' sines and cosines by rotation from the lowest's, not by
+  // libm.
+  void add_slice_misses(std::uint32_t missed, const SliceMeasure& measure, const Angle& lowest,
+                        float h_lo, float to_sector, float u_rot, const V3& view, const V3& t,
+                        float sector_weight, float env_light[3], float cube[kCubeFaces]) const {
+    // The half-disc spans pi from its lowest angle: the bins' steps are constants.
     constexpr int kMissBins = 8;
-    const float step = (hi_theta - lo_theta) / kMissBins;
-    const float cos_step = std::cos(step), sin_step = std::sin(step);
-    const float cos_half = std::cos(0.5f * step), sin_half = std::sin(0.5f * step);
+    constexpr float step = kPi / kMissBins;
+    static const float cos_step = std::cos(step), sin_step = std::sin(step);
+    static const float cos_half = std::cos(0.5f * step), sin_half = std::sin(0.5f * step);
+    const float lo_theta = lowest.theta;
     // The sectors below coordinate u: bits 0 .. ceil(u) - 1.
     auto below = [](float u) {
       const float k = std::min(std::max(std::ceil(u), 0.0f), 32.0f);
       return k >= 32.0f ? ~0u : (1u << static_cast<std::uint32_t>(k)) - 1u;
     };
-    float c = std::cos(lo_theta), s = std::sin(lo_theta);
+    float c = lowest.c, s = lowest.s;
     std::uint32_t done = below(-u_rot);
     for (int i = 0; i < kMissBins; ++i) {
       const float cm = c * cos_half - s * sin_half, sm = s * cos_half + c * sin_half;
@@ -352,8 +354,8 @@ struct SliceTracer {
       const std::uint32_t missed = ~mask;
       *miss += sector_weight * static_cast<float>(sector_count(missed));
       if (missed)
-        add_slice_misses(missed, measure, lowest.theta, highest.theta, h_lo, to_sector, u_rot, view,
-                         t, sector_weight, env_light, cube);
+        add_slice_misses(missed, measure, lowest, h_lo, to_sector, u_rot, view, t, sector_weight,
+                         env_light, cube);
     }
     // Each slice's weight |n_p| x its measure has mean 1 over the slice angles; dividing by the
     // sampled slices' own total makes a pixel's weights sum to 1 exactly (a ratio estimator:
