@@ -368,6 +368,52 @@ TEST_P(SimdTarget, MarchSideMatchesTheScalarTwinBitForBit) {
   EXPECT_GT(bridged, 500u);
 }
 
+TEST_P(SimdTarget, CollectHitsMatchesTheScalarTwinBitForBit) {
+  std::mt19937 rng(13);
+  std::uniform_int_distribution<std::uint32_t> word;
+  std::uniform_int_distribution<int> pick(0, 3);
+  std::size_t hits = 0, saturated = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const int count = trial % 38;  // every length up to past a side's usual 28 steps
+    SideSamples samples;
+    samples.reserve(count);
+    for (int j = 0; j < count; ++j) {
+      // Sparse, dense, empty and full words, as a side's samples bring.
+      const std::uint32_t r = word(rng);
+      const std::uint32_t kinds[4] = {r & word(rng) & word(rng), r, 0u, ~0u};
+      samples.bits[j] = kinds[pick(rng)];
+      samples.pixel[j + 1] = static_cast<std::int32_t>(word(rng) >> 1);
+    }
+    const std::uint32_t start = trial % 5 == 0 ? 0u : word(rng) & word(rng);
+    const float sector_weight = 1e-3f * static_cast<float>(1 + trial);
+    std::vector<std::int32_t> pixel_simd(count + 1), pixel_scalar(count + 1);
+    std::vector<float> weight_simd(count + 1), weight_scalar(count + 1);
+    std::uint32_t mask_simd = start, mask_scalar = start;
+    const int kept_simd = collect_hits(samples, count, sector_weight, &mask_simd, pixel_simd.data(),
+                                       weight_simd.data());
+    const int kept_scalar = collect_hits_scalar(samples, count, sector_weight, &mask_scalar,
+                                                pixel_scalar.data(), weight_scalar.data());
+    ASSERT_EQ(kept_simd, kept_scalar) << trial;
+    ASSERT_EQ(mask_simd, mask_scalar) << trial;
+    std::uint32_t mask = start;
+    float total = 0;
+    for (int k = 0; k < kept_scalar; ++k) {
+      ASSERT_EQ(pixel_simd[k], pixel_scalar[k]) << trial << " " << k;
+      ASSERT_EQ(weight_simd[k], weight_scalar[k]) << trial << " " << k;
+      total += weight_scalar[k];
+    }
+    // Each sector is counted once: the hits' weights are the sectors the side added.
+    for (int j = 0; j < count; ++j) mask |= samples.bits[j];
+    EXPECT_EQ(mask_scalar, mask);
+    EXPECT_NEAR(total, sector_weight * static_cast<float>(sector_count(mask & ~start)),
+                1e-5f * (1 + trial));
+    hits += static_cast<std::size_t>(kept_scalar);
+    saturated += mask == ~0u;
+  }
+  EXPECT_GT(hits, 500u);
+  EXPECT_GT(saturated, 50u);
+}
+
 TEST(Simd, SectorBitsAreTheSectorsInsideTheInterval) {
   EXPECT_EQ(sector_bits(-0.5f, 0.5f), 1u);          // sector 0
   EXPECT_EQ(sector_bits(0.5f, 3.0f), 0b1110u);      // 1, 2, 3

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cassert>
 #include <cmath>
 #include <limits>
 
@@ -14,6 +15,7 @@ namespace ssgi::detail {
 TraceGrid make_trace_grid(const GBuffer& g, const Image& reflected, int scale, float thickness) {
   TraceGrid grid;
   const int w = g.width(), h = g.height();
+  assert(scale >= 1 && scale <= 8);  // a block's depths fit make_trace_grid's array
   grid.scale = scale;
   grid.width = (w + scale - 1) / scale;
   grid.height = (h + scale - 1) / scale;
@@ -31,22 +33,26 @@ TraceGrid make_trace_grid(const GBuffer& g, const Image& reflected, int scale, f
   grid.albedo = Image(grid.width, grid.height, 3);
   const float* depth = g.depth.plane(0);
   parallel_for_rows(grid.height, [&](int by) {
-    std::vector<float> depths;
+    // A block's finite depths, kept sorted as they come: at most 8 x 8, where insertion costs
+    // less than a selection algorithm.
+    std::array<float, 64> depths;
     for (int bx = 0; bx < grid.width; ++bx) {
       const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
-      depths.clear();
+      int finite = 0;
       const int x0 = bx * scale, y0 = by * scale;
       const int x1 = std::min(x0 + scale, w), y1 = std::min(y0 + scale, h);
       for (int y = y0; y < y1; ++y)
         for (int x = x0; x < x1; ++x) {
           const float z = depth[static_cast<std::size_t>(y) * w + x];
-          if (std::isfinite(z)) depths.push_back(z);
+          if (!std::isfinite(z)) continue;
+          int k = finite++;
+          for (; k > 0 && depths[k - 1] > z; --k) depths[k] = depths[k - 1];
+          depths[k] = z;
         }
-      if (depths.empty()) continue;
+      if (finite == 0) continue;
       // The pixel nearest the median depth; on a tie the nearer one, then the first in
       // scanline order.
-      std::nth_element(depths.begin(), depths.begin() + depths.size() / 2, depths.end());
-      const float median = depths[depths.size() / 2];
+      const float median = depths[finite / 2];
       int best = -1;
       float best_d = std::numeric_limits<float>::infinity(), best_z = 0;
       for (int y = y0; y < y1; ++y)

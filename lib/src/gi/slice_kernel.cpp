@@ -238,6 +238,23 @@ int MarchSide(const MeshView& mesh, const SliceFrame& f, const SideMarch& m, Sid
   return m.steps;
 }
 
+int CollectHits(const SideSamples& samples, int count, float sector_weight, std::uint32_t* mask,
+                std::int32_t* pixel, float* weight) {
+  std::uint32_t m = *mask;
+  int kept = 0;
+  // Every step is written, and kept (the index moves on) when it brought sectors of its own: no
+  // branch on data.
+  for (int j = 0; j < count; ++j) {
+    const std::uint32_t fresh = samples.bits[j] & ~m;
+    m |= fresh;
+    pixel[kept] = samples.pixel[j + 1];
+    weight[kept] = sector_weight * static_cast<float>(hwy::PopCount(fresh));
+    kept += fresh != 0;
+  }
+  *mask = m;
+  return kept;
+}
+
 }  // namespace HWY_NAMESPACE
 }  // namespace detail
 }  // namespace ssgi
@@ -248,6 +265,7 @@ namespace ssgi {
 namespace detail {
 
 HWY_EXPORT(MarchSide);
+HWY_EXPORT(CollectHits);
 
 void SideSamples::reserve(int steps) {
   // Whole vectors of up to 16 lanes, and the leading entry for "no step before the first".
@@ -340,6 +358,28 @@ int march_side_scalar(const MeshView& mesh, const SliceFrame& f, const SideMarch
     before_lo = own_lo, before_hi = own_hi;
   }
   return end;
+}
+
+int collect_hits_scalar(const SideSamples& samples, int count, float sector_weight,
+                        std::uint32_t* mask, std::int32_t* pixel, float* weight) {
+  std::uint32_t m = *mask;
+  int kept = 0;
+  for (int j = 0; j < count; ++j) {
+    const std::uint32_t fresh = samples.bits[j] & ~m;
+    m |= fresh;
+    pixel[kept] = samples.pixel[j + 1];
+    weight[kept] = sector_weight * static_cast<float>(sector_count(fresh));
+    kept += fresh != 0;
+  }
+  *mask = m;
+  return kept;
+}
+
+int collect_hits(const SideSamples& samples, int count, float sector_weight, std::uint32_t* mask,
+                 std::int32_t* pixel, float* weight) {
+  if (simd_forced_scalar())
+    return collect_hits_scalar(samples, count, sector_weight, mask, pixel, weight);
+  return HWY_DYNAMIC_DISPATCH(CollectHits)(samples, count, sector_weight, mask, pixel, weight);
 }
 
 int march_side(const MeshView& mesh, const SliceFrame& f, const SideMarch& m, SideSamples* out) {

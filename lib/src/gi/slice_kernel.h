@@ -119,6 +119,24 @@ int march_side(const MeshView& mesh, const SliceFrame& f, const SideMarch& m, Si
 int march_side_scalar(const MeshView& mesh, const SliceFrame& f, const SideMarch& m,
                       SideSamples* out);
 
+// The hits of one marched side, in order: step j's sectors not yet in *mask (fresh) join it,
+// and the step is a hit of weight sector_weight x (fresh sectors) when there are any. Writes
+// pixel[k] and weight[k] for k up to the steps taken (room for `count` entries), returns how
+// many hits were kept. Per SIMD target for its population count (POPCNT from SSE4 on, a
+// library call on the x86-64 baseline); the same integers and products as the twin.
+int collect_hits(const SideSamples& samples, int count, float sector_weight, std::uint32_t* mask,
+                 std::int32_t* pixel, float* weight);
+int collect_hits_scalar(const SideSamples& samples, int count, float sector_weight,
+                        std::uint32_t* mask, std::int32_t* pixel, float* weight);
+
+// The number of sectors (set bits) in a mask, by bit arithmetic: __builtin_popcount is a
+// library call on the x86-64 baseline (no POPCNT instruction assumed).
+inline int sector_count(std::uint32_t v) {
+  v = v - ((v >> 1) & 0x55555555u);
+  v = (v & 0x33333333u) + ((v >> 2) & 0x33333333u);
+  return static_cast<int>((((v + (v >> 4)) & 0x0f0f0f0fu) * 0x01010101u) >> 24);
+}
+
 // The sectors ceil(lo) .. floor(hi) of [lo, hi] as bits (0 when empty or not a number).
 inline std::uint32_t sector_bits(float lo, float hi) {
   if (!(hi > lo)) return 0;

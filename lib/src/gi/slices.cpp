@@ -18,13 +18,6 @@ namespace {
 
 constexpr int kSectors = 32;
 
-// The number of sectors (set bits) in a mask. Bit arithmetic rather than __builtin_popcount,
-// which is a library call on the x86-64 baseline (no POPCNT instruction assumed).
-inline int sector_count(std::uint32_t v) {
-  v = v - ((v >> 1) & 0x55555555u);
-  v = (v & 0x33333333u) + ((v >> 2) & 0x33333333u);
-  return static_cast<int>((((v + (v >> 4)) & 0x0f0f0f0fu) * 0x01010101u) >> 24);
-}
 constexpr float kPi = kSlicePi;
 
 struct V3 {
@@ -341,15 +334,8 @@ struct SliceTracer {
                               model.thickness};
         SideSamples& samples = scratch();
         const int count = march_side(mesh_view, frame, march, &samples);
-        // Every sample is written, and kept (the index moves on) when it brought sectors of its
-        // own: no branch on data.
-        for (int j = 0; j < count && mask != all; ++j) {
-          const std::uint32_t fresh = samples.bits[j] & ~mask;
-          mask |= fresh;
-          hits.pixel[kept] = samples.pixel[j + 1];
-          hits.weight[kept] = sector_weight * static_cast<float>(sector_count(fresh));
-          kept += fresh != 0;
-        }
+        kept += collect_hits(samples, count, sector_weight, &mask, hits.pixel.data() + kept,
+                             hits.weight.data() + kept);
       }
       const std::uint32_t missed = ~mask;
       *miss += sector_weight * static_cast<float>(sector_count(missed));
