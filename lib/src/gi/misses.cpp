@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "gather.h"
+#include "parallel.h"
 
 namespace ssgi::detail {
 namespace {
@@ -169,9 +170,12 @@ std::array<float, 3> MissModel::environment(const Vec3f& d) const {
 
 std::array<std::array<float, 3>, kCubeFaces> MissModel::cube_light(
     const TraceGrid& grid, const std::array<float, 4>* light, std::size_t stride) const {
-  // Sums in double, in a fixed order: the same bits for any thread count.
-  double sum[kCubeFaces][3] = {}, weight[kCubeFaces] = {}, total[3] = {};
-  std::size_t n = 0;
+  // Sums in double, per row in parallel and then over the rows in order: the same bits for any
+  // thread count.
+  struct Sums {
+    double sum[kCubeFaces][3] = {}, weight[kCubeFaces] = {}, total[3] = {}, weight_all = 0;
+    std::size_t n = 0;
+  };
   // Samples near the display window's border weigh most (border_weight): the surfaces a ray
   // meets beyond the frame continue those at its edge.
   std::vector<double> border(static_cast<std::size_t>(grid.width) + grid.height);
@@ -179,23 +183,38 @@ std::array<std::array<float, 3>, kCubeFaces> MissModel::cube_light(
     border[bx] = border_weight(offset_x_ + (bx + 0.5) * grid.scale, display_h_ / 2);
   for (int by = 0; by < grid.height; ++by)
     border[grid.width + by] = border_weight(display_w_ / 2, offset_y_ + (by + 0.5) * grid.scale);
-  double weight_all = 0;
-  for (std::size_t s = 0; s < grid.origin.size(); ++s) {
-    if (grid.origin[s] < 0) continue;
-    const std::array<float, 4>& l = light[stride * s];
-    const double b = std::max(border[s % grid.width], border[grid.width + s / grid.width]);
-    const float nx = grid.normal.plane(0)[s], ny = grid.normal.plane(1)[s],
-                nz = grid.normal.plane(2)[s];
-    for (int i = 0; i < 3; ++i) {
-      const float a = nx * axis_[i].x + ny * axis_[i].y + nz * axis_[i].z;
-      const int face = 2 * i + (a <= 0 ? 0 : 1);  // a ray along +axis meets normals facing -axis
-      const double w = b * a * a;
-      weight[face] += w;
-      for (int c = 0; c < 3; ++c) sum[face][c] += w * l[c];
+  std::vector<Sums> rows(grid.height);
+  parallel_for_rows(grid.height, [&](int by) {
+    Sums& r = rows[by];
+    for (int bx = 0; bx < grid.width; ++bx) {
+      const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
+      if (grid.origin[s] < 0) continue;
+      const std::array<float, 4>& l = light[stride * s];
+      const double b = std::max(border[bx], border[grid.width + by]);
+      const float nx = grid.normal.plane(0)[s], ny = grid.normal.plane(1)[s],
+                  nz = grid.normal.plane(2)[s];
+      for (int i = 0; i < 3; ++i) {
+        const float a = nx * axis_[i].x + ny * axis_[i].y + nz * axis_[i].z;
+        const int face = 2 * i + (a <= 0 ? 0 : 1);  // a ray along +axis meets normals facing -axis
+        const double w = b * a * a;
+        r.weight[face] += w;
+        for (int c = 0; c < 3; ++c) r.sum[face][c] += w * l[c];
+      }
+      for (int c = 0; c < 3; ++c) r.total[c] += b * l[c];
+      r.weight_all += b;
+      ++r.n;
     }
-    for (int c = 0; c < 3; ++c) total[c] += b * l[c];
-    weight_all += b;
-    ++n;
+  });
+  double sum[kCubeFaces][3] = {}, weight[kCubeFaces] = {}, total[3] = {}, weight_all = 0;
+  std::size_t n = 0;
+  for (const Sums& r : rows) {
+    for (int f = 0; f < kCubeFaces; ++f) {
+      weight[f] += r.weight[f];
+      for (int c = 0; c < 3; ++c) sum[f][c] += r.sum[f][c];
+    }
+    for (int c = 0; c < 3; ++c) total[c] += r.total[c];
+    weight_all += r.weight_all;
+    n += r.n;
   }
   std::array<std::array<float, 3>, kCubeFaces> out{};
   if (n == 0 || !(weight_all > 0)) return out;
