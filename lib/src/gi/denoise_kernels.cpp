@@ -181,8 +181,7 @@ void DownsampleRowSimd(const GuidePlanes& fine, const float* const fine_light[3]
   const VF inf = hn::Set(d, kInf), zero = hn::Zero(d), half = hn::Set(d, 0.5f);
   const VF one = hn::Set(d, 1.0f);
   // The block's two fine rows (the second missing below the last row).
-  const std::size_t rows[2] = {static_cast<std::size_t>(2 * y) * fine.width,
-                               static_cast<std::size_t>(2 * y + 1) * fine.width};
+  const std::size_t rows[2] = {fine.index(0, 2 * y), fine.index(0, 2 * y + 1)};
   const bool second_row = 2 * y + 1 < fine.height;
   const float centre_y = 2.0f * static_cast<float>(y) + 0.5f;
   int x0 = 0;
@@ -312,7 +311,7 @@ void UpsampleRowSimd(const GuidePlanes& fine, int y, const GuidePlanes& coarse,
   using VF = hn::Vec<decltype(d)>;
   const RangeWeightV<decltype(d)> weight(terms);
   const int w = fine.width, lanes = static_cast<int>(hn::Lanes(d));
-  const std::size_t row = static_cast<std::size_t>(y) * w;
+  const std::size_t row = fine.index(0, y);
   // Along y the row's two coarse rows and their weights (as in upsample_pixel).
   const int first_y = y % 2 == 0 ? y / 2 - 1 : y / 2;
   const float second_wy = y % 2 == 0 ? 0.75f : 0.25f;

@@ -141,11 +141,18 @@ inline void depth_gradient_pixel(const float* z, int w, int h, int x, int y, flo
   gy[x] = axis_gradient(along_y(-2), along_y(-1), z[i], along_y(1), along_y(2));
 }
 
-// A pyramid level's guides as planes (Surface's fields, one plane each), width x height.
+// A pyramid level's guides as planes (Surface's fields, one plane each), width x height; or a
+// window of its rows from y0 on, for a pass that reads a row or two at a time (the planes then
+// hold only those rows; height stays the level's).
 struct GuidePlanes {
   const float *z, *nx, *ny, *nz, *gx, *gy;
   int width, height;
+  int y0 = 0;  // the first row the planes hold
   Surface at(std::size_t i) const { return {z[i], nx[i], ny[i], nz[i], gx[i], gy[i]}; }
+  // The planes' index of pixel (x, y).
+  std::size_t index(int x, int y) const {
+    return static_cast<std::size_t>(y - y0) * width + static_cast<std::size_t>(x);
+  }
 };
 
 // Weight of a fine pixel's own value in bilateral upsampling. A pixel that no coarse sample
@@ -158,7 +165,7 @@ constexpr float kOwnValueWeight = 1e-3f;
 inline void upsample_pixel(const GuidePlanes& fine, int x, int y, const GuidePlanes& coarse,
                            const float* const coarse_light[3], const float* const own[3],
                            const RangeTerms& terms, float* const out[3]) {
-  const std::size_t i = static_cast<std::size_t>(y) * fine.width + x;
+  const std::size_t i = fine.index(x, y);
   if (!is_surface(fine.z[i])) {
     for (int c = 0; c < 3; ++c) out[c][x] = 0.0f;
     return;
@@ -257,7 +264,7 @@ inline void downsample_pixel(const GuidePlanes& fine, const float* const fine_li
   for (int k = 0; k < 4; ++k) {
     const int fx = 2 * x + (k & 1), fy = 2 * y + (k >> 1);
     if (fx >= fine.width || fy >= fine.height) continue;
-    const std::size_t j = static_cast<std::size_t>(fy) * fine.width + fx;
+    const std::size_t j = fine.index(fx, fy);
     if (!is_surface(fine.z[j])) continue;
     index[count] = j, block[count] = k, depths[count] = fine.z[j];
     ++count;
