@@ -127,6 +127,67 @@ TEST_P(SimdTarget, UpsampleRowMatchesTheScalarTwinBitForBit) {
   EXPECT_GT(blended, 300u);  // the coarse light came through, not only the pixels' own
 }
 
+// Rows [y0, y0 + rows) of `g` copied out, as a window of its rows (the denoiser makes level 0's
+// guides this way).
+struct RowWindow {
+  std::vector<float> z, nx, ny, nz, gx, gy;
+  GuidePlanes window;
+  RowWindow(const RandomGuides& g, int y0, int rows) {
+    rows = std::min(rows, g.height - y0);
+    const auto first = static_cast<std::ptrdiff_t>(y0) * g.width;
+    const auto last = first + static_cast<std::ptrdiff_t>(rows) * g.width;
+    for (auto [to, from] : {std::pair{&z, &g.z}, std::pair{&nx, &g.nx}, std::pair{&ny, &g.ny},
+                            std::pair{&nz, &g.nz}, std::pair{&gx, &g.gx}, std::pair{&gy, &g.gy}})
+      to->assign(from->begin() + first, from->begin() + last);
+    window = {z.data(), nx.data(), ny.data(), nz.data(), gx.data(), gy.data(), g.width, g.height};
+    window.y0 = y0;
+  }
+};
+
+TEST_P(SimdTarget, KernelsReadAWindowOfRowsAsTheWholePlanes) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(0.0f, 4.0f);
+  DenoiseSettings settings;
+  const RangeTerms terms = make_range_terms(settings);
+  std::size_t lit = 0;
+  for (auto [w, h] : {std::pair{1, 1}, std::pair{7, 5}, std::pair{40, 6}, std::pair{33, 3}}) {
+    const RandomGuides fine(rng, w, h), coarse(rng, (w + 1) / 2, (h + 1) / 2);
+    std::vector<float> light(3 * coarse.z.size()), own(3 * static_cast<std::size_t>(w));
+    for (float& v : light) v = u(rng);
+    for (float& v : own) v = u(rng);
+    const std::size_t cn = coarse.z.size();
+    const float* const coarse_light[3] = {light.data(), light.data() + cn, light.data() + 2 * cn};
+    const float* const own_at[3] = {own.data(), own.data() + w, own.data() + 2 * w};
+    for (int y = 0; y < h; ++y) {
+      // Upsampling to row y, from a window of that row alone.
+      std::vector<float> whole(3 * w), windowed(3 * w);
+      float* const whole_at[3] = {whole.data(), whole.data() + w, whole.data() + 2 * w};
+      float* const windowed_at[3] = {windowed.data(), windowed.data() + w, windowed.data() + 2 * w};
+      upsample_row(fine.planes(), y, coarse.planes(), coarse_light, own_at, terms, whole_at);
+      upsample_row(RowWindow(fine, y, 1).window, y, coarse.planes(), coarse_light, own_at, terms,
+                   windowed_at);
+      ASSERT_EQ(std::memcmp(whole.data(), windowed.data(), whole.size() * sizeof(float)), 0)
+          << w << "x" << h << " row " << y;
+      for (float v : whole) lit += v > 0;
+    }
+    const int cw = (w + 1) / 2;
+    const float* const none[3] = {nullptr, nullptr, nullptr};
+    float* const no_light[3] = {nullptr, nullptr, nullptr};
+    for (int y = 0; y < (h + 1) / 2; ++y) {
+      // Halving rows 2y and 2y + 1, from a window of those two.
+      std::vector<float> whole(4 * cw), windowed(4 * cw);
+      auto row = [&](std::vector<float>& v) {
+        return GuideRow{v.data(), v.data() + cw, v.data() + 2 * cw, v.data() + 3 * cw};
+      };
+      downsample_row(fine.planes(), none, y, cw, terms, row(whole), no_light);
+      downsample_row(RowWindow(fine, 2 * y, 2).window, none, y, cw, terms, row(windowed), no_light);
+      ASSERT_EQ(std::memcmp(whole.data(), windowed.data(), whole.size() * sizeof(float)), 0)
+          << w << "x" << h << " coarse row " << y;
+    }
+  }
+  EXPECT_GT(lit, 100u);
+}
+
 TEST_P(SimdTarget, JointBilateralRowMatchesTheScalarTwinBitForBit) {
   std::mt19937 rng(6);
   std::uniform_real_distribution<float> u(0.0f, 4.0f);
