@@ -5,7 +5,8 @@
 # of the relative RMSE of `indirect` against the path-traced DiffInd over surface pixels (RMSE
 # / mean of the truth, all channels, averaged over frames; truth_error) for no GI, for the
 # oracle ambient (the truth's own mean DiffInd per channel and frame as a constant) and for
-# ssgi with the given options (its default settings when none), with ssgi's wall time per
+# ssgi with the given options (its default settings when none), ssgi's level (the mean of its
+# indirect over the truth's: below 1 too dark overall, above 1 too bright), with ssgi's wall time per
 # frame, and a last row of the means over all scenes. Not run by ctest: too slow, and needs
 # blender.
 # Usage: tests/accuracy/training.sh [BUILD_DIR] [-- extra ssgi options]
@@ -32,8 +33,8 @@ done < <("${BLENDER:-blender}" -b --factory-startup --python-exit-code 1 \
 cache=
 [ ${#training[@]} -eq 0 ] || cache=$(tests/accuracy/training/render.sh "${training[@]}" | tail -n 1)
 
-printf '| scene | what it exercises | no GI | oracle ambient | ssgi | s/frame |\n'
-printf '|---|---|---|---|---|---|\n'
+printf '| scene | what it exercises | no GI | oracle ambient | ssgi | ssgi level | s/frame |\n'
+printf '|---|---|---|---|---|---|---|\n'
 rows=()
 for scene in room stage "${training[@]}"; do
   case $scene in
@@ -46,11 +47,11 @@ for scene in room stage "${training[@]}"; do
   "$ssgi" run "$dir/$scene.####.exr" -o "$out/o.####.exr" -q --no-passthrough "${extra[@]}"
   end=$(date +%s.%N)
   seconds=$(echo "($end - $start) / ${#frames[@]}" | bc -l | xargs printf '%.2f')
-  read -r nogi ind _ _ oracle <<< "$(truth_means "$dir" "$scene")"
-  printf '| %s | %s | %s | %s | %s | %s |\n' "$scene" "${what[$scene]:-}" "$nogi" "$oracle" \
-    "$ind" "$seconds"
-  rows+=("$nogi $oracle $ind $seconds")
+  read -r nogi ind _ _ oracle level <<< "$(truth_means "$dir" "$scene")"
+  printf '| %s | %s | %s | %s | %s | %s | %s |\n' "$scene" "${what[$scene]:-}" "$nogi" \
+    "$oracle" "$ind" "$level" "$seconds"
+  rows+=("$nogi $oracle $ind $level $seconds")
 done
-printf '%s\n' "${rows[@]}" | awk '{ z += $1; o += $2; i += $3; s += $4; n++ }
-  END { printf "| **mean** | %d scenes | %.3f | %.3f | %.3f | %.2f |\n",
-    n, z / n, o / n, i / n, s / n }'
+printf '%s\n' "${rows[@]}" | awk '{ z += $1; o += $2; i += $3; l += $4; s += $5; n++ }
+  END { printf "| **mean** | %d scenes | %.3f | %.3f | %.3f | %.3f | %.2f |\n",
+    n, z / n, o / n, i / n, l / n, s / n }'

@@ -4,7 +4,9 @@
 // the same for no GI at all, and of the oracle ambient: the truth's own mean DiffInd over the
 // surface pixels, per channel, as a constant indirect (the best a constant can do on this
 // frame). Surface pixels: Depth.Z < 1e9. Usage: truth_error INPUT.exr OUTPUT.exr [LAYER_PREFIX]
-// prints: no-GI indirect, indirect, no-GI composite, composite, oracle-ambient indirect.
+// prints: no-GI indirect, indirect, no-GI composite, composite, oracle-ambient indirect, and
+// the level of ssgi's indirect (its mean over the surface pixels over the truth's: below 1 too
+// dark overall, above 1 too bright).
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -32,7 +34,7 @@ int main(int argc, char** argv) {
   const std::string v = "ViewLayer.";
   const auto& depth = plane(in, v + "Depth.Z");
   double se_ind = 0, se_comp = 0, se_ind0 = 0, se_comp0 = 0, se_oracle = 0, sum_ind = 0,
-         sum_comp = 0;
+         sum_comp = 0, sum_ssgi = 0;
   std::size_t n = 0;
   const char* rgb[3] = {"R", "G", "B"};
   for (int c = 0; c < 3; ++c) {
@@ -60,13 +62,15 @@ int main(int argc, char** argv) {
       se_comp += (comp[i] - truth_comp) * (comp[i] - truth_comp);
       se_comp0 += (none_comp - truth_comp) * (none_comp - truth_comp);
       sum_ind += truth_ind[i];
+      sum_ssgi += ind[i];
       sum_comp += truth_comp;
       ++n;
     }
   }
   const double mean_ind = sum_ind / n, mean_comp = sum_comp / n;
-  std::printf("%.4f %.4f %.4f %.4f %.4f\n", std::sqrt(se_ind0 / n) / mean_ind,
+  std::printf("%.4f %.4f %.4f %.4f %.4f %.4f\n", std::sqrt(se_ind0 / n) / mean_ind,
               std::sqrt(se_ind / n) / mean_ind, std::sqrt(se_comp0 / n) / mean_comp,
-              std::sqrt(se_comp / n) / mean_comp, std::sqrt(se_oracle / n) / mean_ind);
+              std::sqrt(se_comp / n) / mean_comp, std::sqrt(se_oracle / n) / mean_ind,
+              sum_ssgi / sum_ind);
   return 0;
 }
