@@ -116,7 +116,7 @@ class PackedMesh {
   PackedMesh(const Image& depth, const Image& normal, const SurfaceModel& model)
       : width_(depth.width()), height_(depth.height()), texels_(depth.plane_size()) {
     const DepthMesh mesh(depth, model);
-    for (int j = 0; j < height_; ++j)
+    parallel_for_rows(height_, [&](int j) {
       for (int i = 0; i < width_; ++i) {
         const std::size_t p = static_cast<std::size_t>(j) * width_ + i;
         MeshTexel& t = texels_[p];
@@ -131,6 +131,7 @@ class PackedMesh {
             static_cast<std::uint8_t>((mesh.has_triangle(i, j, true) ? kUpperTriangle : 0) |
                                       (mesh.has_triangle(i, j, false) ? kLowerTriangle : 0));
       }
+    });
   }
 
   MeshView view() const { return {texels_.data(), width_, height_}; }
@@ -391,23 +392,25 @@ WeightedHits trace_slices(const GBuffer& g, const TraceGrid& grid, const GiSetti
       for (int f = 0; f < kCubeFaces; ++f) hits.cube.plane(f)[s] = cube[f];
     }
   });
-  std::size_t total = 0;
-  for (const auto& r : row_pixels) total += r.size();
-  hits.pixel.reserve(total);
-  hits.weight.reserve(total);
+  // Where each row's hits go, then the rows copied into place side by side.
+  std::vector<std::uint32_t> row_start(static_cast<std::size_t>(grid.height) + 1, 0);
+  for (int by = 0; by < grid.height; ++by)
+    row_start[by + 1] = row_start[by] + static_cast<std::uint32_t>(row_pixels[by].size());
+  hits.pixel.resize(row_start.back());
+  hits.weight.resize(row_start.back());
   hits.begin.resize(grid.origin.size() + 1);
-  std::uint32_t at = 0;
-  for (int by = 0; by < grid.height; ++by) {
+  parallel_for_rows(grid.height, [&](int by) {
+    std::uint32_t at = row_start[by];
     for (int bx = 0; bx < grid.width; ++bx) {
       hits.begin[static_cast<std::size_t>(by) * grid.width + bx] = at;
       at += row_counts[by][bx];
     }
-    hits.pixel.insert(hits.pixel.end(), row_pixels[by].begin(), row_pixels[by].end());
-    hits.weight.insert(hits.weight.end(), row_weights[by].begin(), row_weights[by].end());
+    std::copy(row_pixels[by].begin(), row_pixels[by].end(), hits.pixel.begin() + row_start[by]);
+    std::copy(row_weights[by].begin(), row_weights[by].end(), hits.weight.begin() + row_start[by]);
     row_pixels[by] = {};
     row_weights[by] = {};
-  }
-  hits.begin.back() = at;
+  });
+  hits.begin.back() = row_start.back();
   return hits;
 }
 
