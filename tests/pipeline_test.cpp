@@ -337,16 +337,23 @@ TEST(Pipeline, CoarseTraceGridGivesTheFullGridsLight) {
 // for an upper face of length L (Hottel's crossed strings: (1 + cos 90 deg) / 2 as d -> 0). The
 // rays that run along the groove and leave the frame sideways are the rest of the tolerance.
 // A tracer that missed every ray would give 0.
-TEST(Pipeline, GrooveGivesTheViewFactorOfItsLitFace) {
-  GiSettings base;
-  base.miss = MissMode::kEnvironment;
-  base.bounces = 1;
-  base.denoise = DenoiseMode::kNone;
-  base.temporal = TemporalMode::kNone;
-  Frame f = load("plane/plane.0001.exr", base);
-  GBuffer& g = f.g;
+// A right-angled groove seen head-on: its upper face lit (direct 1, albedo 1), its lower face
+// dark, the crease across the middle of the frame at depth 10; misses go to the environment.
+struct Groove {
+  Frame f;
+  double length;  // the upper face's length in the cross-section, crease to the frame's top
+  // The view factor of the whole upper face from pixel (x, y) of the lower face.
+  double view_factor(int x, int y) const {
+    const Vec3d p = f.g.camera.unproject(x + 0.5, y + 0.5, f.g.depth.at(0, x, y));
+    const double d = std::hypot(p.y, p.z - 10.0);
+    return 0.5 * (1 - d / std::hypot(d, length));
+  }
+};
+
+Groove make_groove(const GiSettings& base) {
+  Groove groove{load("plane/plane.0001.exr", base), 0};
+  GBuffer& g = groove.f.g;
   const int w = g.width(), h = g.height();
-  ASSERT_EQ(g.data_window, g.display_window);
   g.camera = camera_from_fov(10.0, g.display_window);
   const Camera& cam = g.camera;
   const double z0 = 10.0;
@@ -365,27 +372,40 @@ TEST(Pipeline, GrooveGivesTheViewFactorOfItsLitFace) {
       g.normal.at(2, x, y) = static_cast<float>(-r);
       for (int c = 0; c < 3; ++c) g.direct.at(c, x, y) = upper ? 1.0f : 0.0f;
     }
-  // The upper face's length in the cross-section, from the crease to the frame's top edge.
   const double yn_top = cam.cy / cam.fy, z_top = z0 / (1 + yn_top);
-  const double length = std::hypot(yn_top * z_top, z0 - z_top);
+  groove.length = std::hypot(yn_top * z_top, z0 - z_top);
+  return groove;
+}
 
+// One bounce, no denoiser or temporal stage, misses to the environment; converged tracers.
+GiSettings groove_settings(Tracer tracer) {
+  GiSettings s;
+  s.miss = MissMode::kEnvironment;
+  s.bounces = 1;
+  s.denoise = DenoiseMode::kNone;
+  s.temporal = TemporalMode::kNone;
+  s.tracer = tracer;
+  s.trace_scale = 1;
+  s.slices = 16;
+  s.rays = 64;
+  s.max_steps = 64;
+  return s;
+}
+
+TEST(Pipeline, GrooveGivesTheViewFactorOfItsLitFace) {
+  const Groove groove = make_groove(groove_settings(Tracer::kSlices));
+  const GBuffer& g = groove.f.g;
+  ASSERT_EQ(g.data_window, g.display_window);
+  const int w = g.width(), h = g.height();
   for (Tracer tracer : kTracers) {
     SCOPED_TRACE(tracer_name(tracer));
-    GiSettings s = base;
-    s.tracer = tracer;
-    s.trace_scale = 1;
-    s.slices = 16;
-    s.rays = 64;
-    s.max_steps = 64;
-    const Pipeline pipeline(f.seq, s);
+    const Pipeline pipeline(groove.f.seq, groove_settings(tracer));
     const Image indirect = pipeline.indirect_light(g);
     double ratio = 0;
     int n = 0;
     for (int y = h / 2; y < h / 2 + 4; ++y)
       for (int x = w / 4; x < 3 * w / 4; ++x) {
-        const Vec3d p = cam.unproject(x + 0.5, y + 0.5, g.depth.at(0, x, y));
-        const double d = std::hypot(p.y, p.z - z0);
-        const double expected = 0.5 * (1 - d / std::hypot(d, length));
+        const double expected = groove.view_factor(x, y);
         ASSERT_GT(expected, 0.4);
         ratio += indirect.at(0, x, y) / expected;
         ++n;
@@ -393,6 +413,44 @@ TEST(Pipeline, GrooveGivesTheViewFactorOfItsLitFace) {
     std::printf("%s: indirect / view factor %.4f over %d pixels\n", tracer_name(tracer), ratio / n,
                 n);
     EXPECT_NEAR(ratio / n, 1.0, 0.05);
+  }
+}
+
+// Coverage: the lower face's light comes through its rays to the lit face (view factor F) and
+// through the misses to an environment of 0.5 (the rest of its hemisphere), so that the traced
+// share is F / (F + 0.5 (1 - F)); the lit face's rays meet only the dark face, so that all its
+// light is the environment's (0). With a black environment the lit face gathers nothing, and
+// its coverage is the share of its hemisphere that met the dark face.
+TEST(Pipeline, CoverageIsTheShareOfTheLightTheTracedRaysBrought) {
+  const Groove groove = make_groove(groove_settings(Tracer::kSlices));
+  const GBuffer& g = groove.f.g;
+  const int w = g.width(), h = g.height();
+  for (Tracer tracer : kTracers) {
+    SCOPED_TRACE(tracer_name(tracer));
+    for (float env : {0.5f, 0.0f}) {
+      GiSettings s = groove_settings(tracer);
+      s.env_color = {env, env, env};
+      const Pipeline pipeline(groove.f.seq, s);
+      Image coverage;
+      pipeline.indirect_light(g, &coverage);
+      const FrameResult result = pipeline.composite(g, pipeline.indirect_light(g), coverage);
+      ASSERT_EQ(result.coverage.channels(), 1);
+      double lower = 0, upper = 0;
+      int n = 0;
+      for (int y = h / 2; y < h / 2 + 4; ++y)
+        for (int x = w / 4; x < 3 * w / 4; ++x) {
+          const double f = groove.view_factor(x, y);
+          const double expected = env > 0 ? f / (f + env * (1 - f)) : 1.0;
+          lower += result.coverage.at(0, x, y) / expected;
+          // The lit face's mirror pixel sees the dark face as the dark face sees it.
+          upper += result.coverage.at(0, x, h - 1 - y) - (env > 0 ? 0.0 : f);
+          ++n;
+        }
+      std::printf("%s, env %.1f: coverage / expected %.4f (dark face), - expected %.4f (lit)\n",
+                  tracer_name(tracer), env, lower / n, upper / n);
+      EXPECT_NEAR(lower / n, 1.0, 0.05);
+      EXPECT_NEAR(upper / n, 0.0, 0.03);
+    }
   }
 }
 

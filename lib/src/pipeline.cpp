@@ -185,8 +185,9 @@ struct Pipeline::Impl {
   PipelineMemory memory;
 
   // Tracing, misses and bounces on the trace grid: the light before the denoiser, and, when
-  // `grid_out` is given, the grid as a G-buffer for the temporal stage.
-  Image trace(const GBuffer& g, GBuffer* grid_out) const;
+  // `grid_out` is given, the grid as a G-buffer for the temporal stage, when `coverage` is, the
+  // coverage there (gather_bounces).
+  Image trace(const GBuffer& g, GBuffer* grid_out, Image* coverage) const;
 };
 
 Pipeline::Pipeline(const SequenceInfo& seq, const GiSettings& settings,
@@ -249,7 +250,7 @@ int pyramid_level(int scale) {
 
 }  // namespace
 
-Image Pipeline::Impl::trace(const GBuffer& g, GBuffer* grid_out) const {
+Image Pipeline::Impl::trace(const GBuffer& g, GBuffer* grid_out, Image* coverage) const {
   const GiSettings& s = settings;
   const Image reflected = detail::reflected_radiance(g, plan.gather_emission);
   const detail::TraceGrid grid =
@@ -260,28 +261,56 @@ Image Pipeline::Impl::trace(const GBuffer& g, GBuffer* grid_out) const {
   switch (s.tracer) {
     case Tracer::kReference: {
       const detail::ReferenceHits hits(g, s, misses, memory.reference_hits_bytes);
-      return detail::gather_bounces(grid, hits, s.bounces, misses);
+      return detail::gather_bounces(grid, hits, s.bounces, misses, coverage);
     }
     case Tracer::kScreenSpace: {
       // The march's rays are freed before the bounces.
       const detail::WeightedHits hits =
           detail::weighted_from_rays(grid, detail::march_screen_space(g, s, misses));
-      return detail::gather_bounces(grid, hits, s.bounces, misses);
+      return detail::gather_bounces(grid, hits, s.bounces, misses, coverage);
     }
     case Tracer::kSlices:
       break;
   }
-  return detail::gather_bounces(grid, detail::trace_slices(g, grid, s, misses), s.bounces, misses);
+  return detail::gather_bounces(grid, detail::trace_slices(g, grid, s, misses), s.bounces, misses,
+                                coverage);
 }
+
+namespace {
+
+// A 1-channel image as the 3 channels the denoiser carries, and back.
+Image three_channels(const Image& one) {
+  Image out(one.width(), one.height(), 3);
+  for (int c = 0; c < 3; ++c) std::copy_n(one.plane(0), one.plane_size(), out.plane(c));
+  return out;
+}
+Image first_channel(const Image& three) {
+  Image out(three.width(), three.height(), 1);
+  std::copy_n(three.plane(0), three.plane_size(), out.plane(0));
+  return out;
+}
+
+}  // namespace
 
 Pipeline::TracedLight Pipeline::trace_light(const GBuffer& g) const {
   TracedLight out;
-  out.light = impl_->trace(g, &out.grid);
+  out.light = impl_->trace(g, &out.grid, &out.coverage);
   const int level = pyramid_level(impl_->plan.trace_scale);
-  if (impl_->plan.denoise)
-    out.light = detail::upsample_and_denoise(out.light, level, g.depth, g.normal,
-                                             impl_->settings.denoise_settings, true, level);
+  if (impl_->plan.denoise) {
+    const DenoiseSettings& d = impl_->settings.denoise_settings;
+    out.light = detail::upsample_and_denoise(out.light, level, g.depth, g.normal, d, true, level);
+    out.coverage = first_channel(detail::upsample_and_denoise(three_channels(out.coverage), level,
+                                                              g.depth, g.normal, d, true, level));
+  }
   return out;
+}
+
+Image Pipeline::finish_coverage(const GBuffer& g, const Image& grid_coverage) const {
+  const int level = pyramid_level(impl_->plan.trace_scale);
+  if (level == 0) return grid_coverage;
+  return first_channel(detail::upsample_and_denoise(three_channels(grid_coverage), level, g.depth,
+                                                    g.normal, impl_->settings.denoise_settings,
+                                                    false));
 }
 
 Image Pipeline::finish_light(const GBuffer& g, const Image& grid_light) const {
@@ -291,25 +320,28 @@ Image Pipeline::finish_light(const GBuffer& g, const Image& grid_light) const {
                                       impl_->settings.denoise_settings, false);
 }
 
-Image Pipeline::indirect_light(const GBuffer& g) const {
+Image Pipeline::indirect_light(const GBuffer& g, Image* coverage) const {
   // Without a temporal stage in between, one pass of the pyramid filters and upsamples (its
   // guides are built once): finish_light(trace_light(g)) but for the 1e-3 own-value fallback
   // of pixels no coarse sample resembles, which takes the traced light here, the filtered one
   // there.
   const Plan& plan = impl_->plan;
   const int level = pyramid_level(plan.trace_scale);
-  Image light = impl_->trace(g, nullptr);
+  Image light = impl_->trace(g, nullptr, coverage);
   if (level == 0 && !plan.denoise) return light;
-  return detail::upsample_and_denoise(light, level, g.depth, g.normal,
-                                      impl_->settings.denoise_settings, plan.denoise);
+  const DenoiseSettings& d = impl_->settings.denoise_settings;
+  if (coverage)
+    *coverage = first_channel(detail::upsample_and_denoise(three_channels(*coverage), level,
+                                                           g.depth, g.normal, d, plan.denoise));
+  return detail::upsample_and_denoise(light, level, g.depth, g.normal, d, plan.denoise);
 }
 
 std::string Pipeline::describe_misses(const GBuffer& g) const {
   return detail::MissModel(g, impl_->settings.miss, impl_->env).describe();
 }
 
-FrameResult Pipeline::composite(const GBuffer& g, Image indirect) const {
-  return detail::composite_frame(g, std::move(indirect));
+FrameResult Pipeline::composite(const GBuffer& g, Image indirect, Image coverage) const {
+  return detail::composite_frame(g, std::move(indirect), std::move(coverage));
 }
 
 }  // namespace ssgi

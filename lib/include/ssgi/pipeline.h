@@ -34,6 +34,10 @@ struct FrameResult {
   Image indirect;   // 3: diffuse indirect light without albedo (Cycles' DiffInd)
   Image gi;         // 3: albedo x indirect
   Image composite;  // 4: direct + emission + gi on surfaces, the input beauty elsewhere
+  // 1: the share of the indirect light that traced rays brought (1) rather than the miss
+  // model's estimate of what lies off screen or behind everything (0); 0 on background. Empty
+  // when the caller gave none to composite().
+  Image coverage;
 };
 
 // What the pipeline may hold besides its frames' planes. It does not change the light.
@@ -63,7 +67,8 @@ class Pipeline {
   // camera; windows from (0, 0)): what the temporal stage filters.
   struct TracedLight {
     GBuffer grid;
-    Image light;  // 3 channels, the grid's size
+    Image light;     // 3 channels, the grid's size
+    Image coverage;  // 1 channel, the grid's size: FrameResult::coverage there, denoised
   };
   TracedLight trace_light(const GBuffer& frame) const;
 
@@ -71,16 +76,21 @@ class Pipeline {
   // the denoiser's bilateral upsampling.
   Image finish_light(const GBuffer& frame, const Image& grid_light) const;
 
+  // TracedLight::coverage carried to the frame's resolution as finish_light carries the light
+  // (1 channel).
+  Image finish_coverage(const GBuffer& frame, const Image& grid_coverage) const;
+
   // trace_light then finish_light: the frame's indirect light (3 channels) without temporal
-  // filtering.
-  Image indirect_light(const GBuffer& frame) const;
+  // filtering; with `coverage`, its coverage at the frame's resolution too.
+  Image indirect_light(const GBuffer& frame, Image* coverage = nullptr) const;
 
   // What the miss model decides for `frame` (lib/src/gi/misses.h; man ssgi, MISSES) and the
   // numbers it decides from, in one line: what -v prints per frame.
   std::string describe_misses(const GBuffer& frame) const;
 
-  // The composite stage: outputs from the (temporally filtered) indirect light.
-  FrameResult composite(const GBuffer& frame, Image indirect) const;
+  // The composite stage: outputs from the (temporally filtered) indirect light, and its
+  // coverage at the frame's resolution when given (FrameResult::coverage).
+  FrameResult composite(const GBuffer& frame, Image indirect, Image coverage = {}) const;
 
  private:
   struct Impl;

@@ -38,10 +38,12 @@ Image reflected_radiance(const GBuffer& g, bool with_emission) {
   return out;
 }
 
-FrameResult composite_frame(const GBuffer& g, Image indirect) {
+FrameResult composite_frame(const GBuffer& g, Image indirect, Image coverage) {
   const int w = g.width(), h = g.height();
   FrameResult r;
   r.indirect = std::move(indirect);
+  r.coverage = std::move(coverage);
+  const bool with_coverage = !r.coverage.empty();
   r.gi = Image(w, h, 3);
   r.composite = Image(w, h, 4);
   const bool emission = !g.emission.empty(), beauty = !g.beauty.empty();
@@ -67,6 +69,11 @@ FrameResult composite_frame(const GBuffer& g, Image indirect) {
         if (emitted) rgb += emitted[x];
         out[x] = finite(rgb);
       }
+    }
+    if (with_coverage) {
+      float* cov = r.coverage.plane(0) + row;
+      for (int x = 0; x < w; ++x)
+        cov[x] = std::isfinite(depth[x]) ? std::clamp(finite(cov[x]), 0.0f, 1.0f) : 0.0f;
     }
     float* alpha = r.composite.plane(3) + row;
     const float* beauty_alpha = beauty ? g.beauty.plane(3) + row : nullptr;

@@ -7,8 +7,9 @@
 namespace ssgi::detail {
 
 // gi = albedo x indirect; composite = direct + emission + gi on surfaces, the input beauty
-// (or 0) on background pixels; alpha from the beauty, else 1.
-FrameResult composite_frame(const GBuffer& g, Image indirect);
+// (or 0) on background pixels; alpha from the beauty, else 1; the coverage, when given, kept
+// within [0, 1] and 0 on background.
+FrameResult composite_frame(const GBuffer& g, Image indirect, Image coverage = {});
 
 // The light a surface reflects towards others: direct (albedo included), plus emission when
 // `with_emission`; 0 on background.

@@ -166,11 +166,13 @@ class HeldHits final : public HitSource {
 using CubeLight = std::array<std::array<float, 3>, kCubeFaces>;
 
 // One gather: the light `radiance(hit)` of every hit, plus the misses' environment light and
-// their cube shares x the cube's colours.
+// their cube shares x the cube's colours; with `coverage`, the hits' share of it there
+// (gather_bounces).
 template <typename Radiance>
 Image gather_once(const TraceGrid& grid, const HitSource& hits, const Radiance& radiance,
-                  const CubeLight& cube) {
+                  const CubeLight& cube, Image* coverage = nullptr) {
   Image out(grid.width, grid.height, 3);
+  if (coverage) *coverage = Image(grid.width, grid.height, 1);
   parallel_for_rows(grid.height, [&](int by) {
     HitScratch scratch;
     const HitRow row = hits.row(by, &scratch);
@@ -185,6 +187,7 @@ Image gather_once(const TraceGrid& grid, const HitSource& hits, const Radiance& 
         const float share = shares.plane(f)[s];
         for (int c = 0; c < 3; ++c) sum[c] += share * cube[f][c];
       }
+      const std::array<float, 3> missed = sum;
       const std::uint32_t first = row.begin[bx], end = row.begin[bx + 1];
       for (std::uint32_t e = first; e < end; ++e) {
         const std::array<float, 3> l = radiance(row.pixel[e]);
@@ -192,6 +195,20 @@ Image gather_once(const TraceGrid& grid, const HitSource& hits, const Radiance& 
         for (int c = 0; c < 3; ++c) sum[c] += weight * l[c];
       }
       for (int c = 0; c < 3; ++c) out.plane(c)[s] = sum[c];
+      if (coverage) {
+        // The hits' light over all of it, from sums that stay apart (the hits' part is not
+        // sum - missed, which rounding could take below 0 or above the total).
+        float from_hits = 0;
+        for (std::uint32_t e = first; e < end; ++e) {
+          const std::array<float, 3> l = radiance(row.pixel[e]);
+          const float weight = row.weight ? row.weight[e] : row.uniform_weight;
+          from_hits += weight * (l[0] + l[1] + l[2]);
+        }
+        const float total = from_hits + (missed[0] + missed[1] + missed[2]);
+        coverage->plane(0)[s] = total > 0 && std::isfinite(total)
+                                    ? std::clamp(from_hits / total, 0.0f, 1.0f)
+                                    : std::clamp(1.0f - hits.miss().plane(0)[s], 0.0f, 1.0f);
+      }
     }
   });
   return out;
@@ -200,12 +217,12 @@ Image gather_once(const TraceGrid& grid, const HitSource& hits, const Radiance& 
 }  // namespace
 
 Image gather_bounces(const TraceGrid& grid, const WeightedHits& hits, int bounces,
-                     const MissModel& misses) {
-  return gather_bounces(grid, HeldHits(grid, hits), bounces, misses);
+                     const MissModel& misses, Image* coverage) {
+  return gather_bounces(grid, HeldHits(grid, hits), bounces, misses, coverage);
 }
 
 Image gather_bounces(const TraceGrid& grid, const HitSource& hits, int bounces,
-                     const MissModel& misses) {
+                     const MissModel& misses, Image* coverage) {
   // Each bounce's light per trace sample, packed RGB_ so that a hit is one 16-byte load: at 2 s
   // the light of its front (what it reflects plus albedo x its indirect light), at 2 s + 1 that
   // of its unseen back (albedo x indirect only), which hits from behind bring (surface_model.h).
@@ -219,7 +236,8 @@ Image gather_bounces(const TraceGrid& grid, const HitSource& hits, int bounces,
         light[2 * static_cast<std::size_t>(hit_pixel(hit)) + (hit >= kSeenFromBehind ? 1 : 0)];
     return std::array<float, 3>{l[0], l[1], l[2]};
   };
-  Image indirect = gather_once(grid, hits, lookup, misses.cube_light(grid, light.data(), 2));
+  Image indirect = gather_once(grid, hits, lookup, misses.cube_light(grid, light.data(), 2),
+                               bounces == 1 ? coverage : nullptr);
   for (int b = 1; b < bounces; ++b) {
     parallel_for_rows(grid.height, [&](int by) {
       for (int bx = 0; bx < grid.width; ++bx) {
@@ -231,7 +249,8 @@ Image gather_bounces(const TraceGrid& grid, const HitSource& hits, int bounces,
         }
       }
     });
-    indirect = gather_once(grid, hits, lookup, misses.cube_light(grid, light.data(), 2));
+    indirect = gather_once(grid, hits, lookup, misses.cube_light(grid, light.data(), 2),
+                           b + 1 == bounces ? coverage : nullptr);
   }
   return indirect;
 }

@@ -87,10 +87,14 @@ class HitSource {
 // sample's reflected light plus, from the second bounce on, its albedo x the indirect light it
 // gathered in the bounce before (a hit from behind only the latter: surface_model.h); the missed
 // share brings its environment light plus its cube shares x the cube colours `misses` finds at
-// that bounce (misses.h). 0 where the grid has no origin.
+// that bounce (misses.h). 0 where the grid has no origin. With `coverage`, also per trace
+// sample (1 channel) the share of the last gather's light that its hits brought rather than the
+// miss model (the mean of the three channels; where nothing brought light, the share of the
+// hemisphere that met a traced surface): 1 where the result is traced, 0 where it is the miss
+// model's estimate.
 Image gather_bounces(const TraceGrid& grid, const HitSource& hits, int bounces,
-                     const MissModel& misses);
+                     const MissModel& misses, Image* coverage = nullptr);
 Image gather_bounces(const TraceGrid& grid, const WeightedHits& hits, int bounces,
-                     const MissModel& misses);
+                     const MissModel& misses, Image* coverage = nullptr);
 
 }  // namespace ssgi::detail
