@@ -41,28 +41,84 @@ void refuse_deep(OIIO::ImageInput& in, int subimage, const std::string& path) {
                           "(oiiotool IN --flatten -o OUT)");
 }
 
+namespace {
+
+// Scanlines per chunk of a scanline file's compression (OpenEXR's table); unknown: 32.
+int lines_per_chunk(const OIIO::ImageSpec& spec) {
+  const std::string compression = spec.get_string_attribute("compression", "none");
+  const std::string name = compression.substr(0, compression.find(':'));
+  if (name == "none" || name == "rle" || name == "zips") return 1;
+  if (name == "zip" || name == "pxr24") return 16;
+  if (name == "dwab") return 256;
+  return 32;  // piz, b44, b44a, dwaa
+}
+
+// Rows read at once: whole chunks, about this many bytes of float pixels.
+constexpr std::size_t kStripBytes = std::size_t{16} << 20;
+
+}  // namespace
+
+void read_float_channels(OIIO::ImageInput& in, int subimage,
+                         const std::vector<PlaneTarget>& targets, const Box2i& window,
+                         const std::string& path) {
+  if (targets.empty()) return;
+  if (!in.seek_subimage(subimage, 0))
+    throw_io(path, "cannot read part " + std::to_string(subimage));
+  refuse_deep(in, subimage, path);
+  const OIIO::ImageSpec spec = in.spec();
+  int lo = spec.nchannels, hi = -1;
+  for (const PlaneTarget& t : targets) {
+    assert(t.channel >= 0 && t.channel < spec.nchannels);
+    lo = std::min(lo, t.channel);
+    hi = std::max(hi, t.channel);
+  }
+  const int n = hi - lo + 1;
+  // The part's pixels that fall in the window.
+  const int x0 = std::max(spec.x, window.x0), x1 = std::min(spec.x + spec.width, window.x1);
+  const int y0 = std::max(spec.y, window.y0), y1 = std::min(spec.y + spec.height, window.y1);
+  if (x1 <= x0 || y1 <= y0) return;
+  const int chunk = spec.tile_width > 0 ? spec.tile_height : lines_per_chunk(spec);
+  const std::size_t row_bytes = static_cast<std::size_t>(spec.width) * n * sizeof(float);
+  const int rows = chunk * std::max<int>(1, static_cast<int>(kStripBytes / (row_bytes * chunk)));
+  std::vector<float> strip(static_cast<std::size_t>(rows) * spec.width * n);
+  // Strips start on chunk boundaries, which count from the part's top.
+  for (int top = spec.y + (y0 - spec.y) / chunk * chunk; top < y1; top += rows) {
+    const int bottom = std::min(top + rows, spec.y + spec.height);
+    const bool ok =
+        spec.tile_width > 0
+            ? in.read_tiles(subimage, 0, spec.x, spec.x + spec.width, top, bottom, spec.z,
+                            spec.z + 1, lo, hi + 1, OIIO::TypeDesc::FLOAT, strip.data())
+            : in.read_scanlines(subimage, 0, top, bottom, spec.z, lo, hi + 1, OIIO::TypeDesc::FLOAT,
+                                strip.data());
+    if (!ok) throw_io(path, "cannot read pixels: " + one_line(in.geterror()));
+    for (int y = std::max(top, y0); y < std::min(bottom, y1); ++y) {
+      const float* src =
+          strip.data() + (static_cast<std::size_t>(y - top) * spec.width + (x0 - spec.x)) * n;
+      const std::size_t dst_row =
+          static_cast<std::size_t>(y - window.y0) * window.width() + (x0 - window.x0);
+      for (const PlaneTarget& t : targets) {
+        const float* s = src + (t.channel - lo);
+        float* d = t.plane + dst_row;
+        for (int x = 0; x < x1 - x0; ++x) d[x] = s[static_cast<std::size_t>(x) * n];
+      }
+    }
+  }
+}
+
 std::vector<std::vector<float>> read_float_planes(OIIO::ImageInput& in, int subimage,
                                                   const std::vector<int>& indices,
                                                   const std::string& path) {
   if (indices.empty()) return {};
   if (!in.seek_subimage(subimage, 0))
     throw_io(path, "cannot read part " + std::to_string(subimage));
-  refuse_deep(in, subimage, path);
   const OIIO::ImageSpec& spec = in.spec();
-  const int lo = *std::min_element(indices.begin(), indices.end());
-  const int hi = *std::max_element(indices.begin(), indices.end());
-  assert(lo >= 0 && hi < spec.nchannels);
-  const int n = hi - lo + 1;
-  const std::size_t pixels = static_cast<std::size_t>(spec.width) * spec.height;
-  std::vector<float> interleaved(pixels * n);
-  if (!in.read_image(subimage, 0, lo, hi + 1, OIIO::TypeDesc::FLOAT, interleaved.data()))
-    throw_io(path, "cannot read pixels: " + one_line(in.geterror()));
-  std::vector<std::vector<float>> planes(indices.size(), std::vector<float>(pixels));
-  for (std::size_t i = 0; i < indices.size(); ++i) {
-    const int c = indices[i] - lo;
-    float* dst = planes[i].data();
-    for (std::size_t p = 0; p < pixels; ++p) dst[p] = interleaved[p * n + c];
-  }
+  const Box2i part = {spec.x, spec.y, spec.x + spec.width, spec.y + spec.height};
+  std::vector<std::vector<float>> planes(
+      indices.size(), std::vector<float>(static_cast<std::size_t>(spec.width) * spec.height));
+  std::vector<PlaneTarget> targets;
+  for (std::size_t i = 0; i < indices.size(); ++i)
+    targets.push_back({indices[i], planes[i].data()});
+  read_float_channels(in, subimage, targets, part, path);
   return planes;
 }
 

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "ssgi/image.h"
 #include "ssgi/temporary_files.h"
 
 namespace ssgi::detail {
@@ -26,10 +27,26 @@ std::unique_ptr<OIIO::ImageInput> open_image(const std::string& path);
 // Error(kIO) when it cannot be found.
 void refuse_deep(OIIO::ImageInput& in, int subimage, const std::string& path);
 
-// Reads channels `indices` (of subimage `subimage`, any order) as one float plane each, with a
-// single read of the range that covers them: OIIO 2.4 decompresses every ZIP block again for
-// each read. Throws Error(kIO) naming `path` when the pixels cannot be read, Error(kInput) for
-// deep data.
+// A channel of a part and the plane it is read into: `window`-sized, row-major (see
+// read_float_channels).
+struct PlaneTarget {
+  int channel = 0;  // index in the part's channel list
+  float* plane = nullptr;
+};
+
+// Reads the channels of `targets` (of subimage `subimage`, any order, a channel may have several
+// targets) as float into planes covering `window` (absolute pixel coordinates): the part's
+// pixels where they fall in the window; pixels of the window outside the part are left as they
+// are. Reads the channel range that covers them in strips of whole chunks (scanline blocks or
+// rows of tiles) of a few megabytes, each chunk decoded once (OIIO 2.4 decompresses every ZIP
+// block again for each read of it), so that no whole-frame interleaved buffer is ever held.
+// Throws Error(kIO) naming `path` when the pixels cannot be read, Error(kInput) for deep data.
+void read_float_channels(OIIO::ImageInput& in, int subimage,
+                         const std::vector<PlaneTarget>& targets, const Box2i& window,
+                         const std::string& path);
+
+// Reads channels `indices` (of subimage `subimage`, any order) as one float plane each, of the
+// part's own data window (read_float_channels).
 std::vector<std::vector<float>> read_float_planes(OIIO::ImageInput& in, int subimage,
                                                   const std::vector<int>& indices,
                                                   const std::string& path);
