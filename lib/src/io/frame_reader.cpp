@@ -2,14 +2,17 @@
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <limits>
 #include <map>
 #include <memory>
 #include <regex>
 
 #include "camera_header.h"
+#include "input_frame.h"
 #include "oiio_files.h"
 #include "parallel.h"
 #include "ssgi/color.h"
@@ -426,11 +429,20 @@ Camera read_camera(const SequenceInfo& seq, int frame, const InputOptions& optio
   return find_camera(options, in->spec(), frame, seq.display_window, seq.pixel_aspect, path);
 }
 
-GBuffer read_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
-                     const InputOptions& options, const ColorManagement* color) {
-  const std::string path = seq.pattern.path_for(frame);
-  auto in = open_exr(path);
-  const OIIO::ImageSpec spec = in->spec();
+namespace {
+
+// Reads the channels of `targets` of one subimage into their planes (the frame's data window).
+using FillChannels =
+    std::function<void(int subimage, const std::vector<detail::PlaneTarget>& targets)>;
+
+// The G-buffer of `roles` from `input`'s headers, its planes filled by `fill` (from the file or
+// from the kept pixels) and converted to the library's conventions.
+GBuffer convert_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
+                        const InputOptions& options, const ColorManagement* color,
+                        const detail::DecodedInput& input, const FillChannels& fill) {
+  const std::string& path = input.path;
+  assert(!input.parts.empty());
+  const OIIO::ImageSpec& spec = input.parts.front().spec;
   check_windows(seq, spec, path);
 
   GBuffer g;
@@ -491,9 +503,9 @@ GBuffer read_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
     target(Role::kBeauty, &g.beauty, 0, n);
   }
   for (const auto& [subimage, names] : by_subimage) {
-    if (!in->seek_subimage(subimage, 0))
+    if (subimage < 0 || subimage >= static_cast<int>(input.parts.size()))
       throw_input(path, "has no subimage " + std::to_string(subimage));
-    const std::vector<std::string>& present = in->spec().channelnames;
+    const std::vector<std::string>& present = input.parts[subimage].spec.channelnames;
     std::vector<detail::PlaneTarget> targets;
     for (const auto& [name, plane] : names) {
       const auto it = std::find(present.begin(), present.end(), name);
@@ -503,7 +515,7 @@ GBuffer read_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
     // A part with a data window of its own (Nuke writes each part's bounding box) gives its
     // pixels where they fall in the frame's window, 0 elsewhere, as OpenEXR reads pixels
     // outside a data window.
-    detail::read_float_channels(*in, subimage, targets, seq.data_window, path);
+    fill(subimage, targets);
   }
 
   std::size_t non_finite = 0;
@@ -547,6 +559,42 @@ GBuffer read_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
     log_warning(path + ": " + std::to_string(non_finite) +
                 " NaN or infinite values in normal, albedo, light or beauty channels read as 0");
   return g;
+}
+
+}  // namespace
+
+namespace detail {
+
+InputFrame read_input_frame(const SequenceInfo& seq, int frame, RoleMask roles,
+                            const InputOptions& options, const ColorManagement* color,
+                            bool keep_pixels) {
+  const std::string path = seq.pattern.path_for(frame);
+  auto in = open_exr(path);
+  auto input = std::make_shared<DecodedInput>(decode_input(*in, path, keep_pixels));
+  const FillChannels fill = [&](int subimage, const std::vector<PlaneTarget>& targets) {
+    if (keep_pixels)
+      float_channels_from(*input, subimage, targets, seq.data_window);
+    else
+      read_float_channels(*in, subimage, targets, seq.data_window, path);
+  };
+  GBuffer g = convert_gbuffer(seq, frame, roles, options, color, *input, fill);
+  return {std::move(g), std::move(input)};
+}
+
+GBuffer gbuffer_from_input(const SequenceInfo& seq, int frame, RoleMask roles,
+                           const InputOptions& options, const ColorManagement* color,
+                           const DecodedInput& input) {
+  const FillChannels fill = [&](int subimage, const std::vector<PlaneTarget>& targets) {
+    float_channels_from(input, subimage, targets, seq.data_window);
+  };
+  return convert_gbuffer(seq, frame, roles, options, color, input, fill);
+}
+
+}  // namespace detail
+
+GBuffer read_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
+                     const InputOptions& options, const ColorManagement* color) {
+  return detail::read_input_frame(seq, frame, roles, options, color, false).g;
 }
 
 }  // namespace ssgi

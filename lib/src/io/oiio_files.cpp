@@ -32,13 +32,16 @@ std::unique_ptr<OIIO::ImageInput> open_image(const std::string& path) {
   return in;
 }
 
+void throw_deep(const std::string& path, int subimage) {
+  throw_input(path, "part " + std::to_string(subimage) +
+                        " holds deep data, which ssgi does not read yet: flatten it first "
+                        "(oiiotool IN --flatten -o OUT)");
+}
+
 void refuse_deep(OIIO::ImageInput& in, int subimage, const std::string& path) {
   if (!in.seek_subimage(subimage, 0))
     throw_io(path, "cannot read part " + std::to_string(subimage));
-  if (in.spec().deep)
-    throw_input(path, "part " + std::to_string(subimage) +
-                          " holds deep data, which ssgi does not read yet: flatten it first "
-                          "(oiiotool IN --flatten -o OUT)");
+  if (in.spec().deep) throw_deep(path, subimage);
 }
 
 namespace {
@@ -133,6 +136,56 @@ std::vector<std::byte> read_native_pixels(OIIO::ImageInput& in, int subimage,
   return pixels;
 }
 
+std::size_t DecodedInput::pixel_bytes() const {
+  std::size_t bytes = 0;
+  for (const Part& part : parts) bytes += part.pixels.size();
+  return bytes;
+}
+
+DecodedInput decode_input(OIIO::ImageInput& in, const std::string& path, bool keep_pixels) {
+  DecodedInput input;
+  input.path = path;
+  for (int s = 0; in.seek_subimage(s, 0); ++s) {
+    DecodedInput::Part part;
+    part.spec = in.spec();
+    part.has_mip_levels = in.seek_subimage(s, 1);
+    input.parts.push_back(std::move(part));
+  }
+  in.geterror();  // seek_subimage past the last part leaves a message
+  if (keep_pixels)
+    for (std::size_t s = 0; s < input.parts.size(); ++s)
+      if (!input.parts[s].spec.deep)
+        input.parts[s].pixels = read_native_pixels(in, static_cast<int>(s), path);
+  return input;
+}
+
+void float_channels_from(const DecodedInput& input, int subimage,
+                         const std::vector<PlaneTarget>& targets, const Box2i& window) {
+  if (targets.empty()) return;
+  assert(subimage >= 0 && subimage < static_cast<int>(input.parts.size()));
+  const DecodedInput::Part& part = input.parts[subimage];
+  const OIIO::ImageSpec& spec = part.spec;
+  if (spec.deep) throw_deep(input.path, subimage);
+  assert(part.pixels.size() == spec.image_bytes(/*native=*/true));
+  const int x0 = std::max(spec.x, window.x0), x1 = std::min(spec.x + spec.width, window.x1);
+  const int y0 = std::max(spec.y, window.y0), y1 = std::min(spec.y + spec.height, window.y1);
+  if (x1 <= x0 || y1 <= y0) return;
+  const std::size_t pixel_bytes = spec.pixel_bytes(/*native=*/true);
+  const std::size_t row_bytes = pixel_bytes * spec.width;
+  for (const PlaneTarget& t : targets) {
+    const std::size_t offset = spec.pixel_bytes(0, t.channel, /*native=*/true);
+    const std::byte* src = part.pixels.data() + static_cast<std::size_t>(y0 - spec.y) * row_bytes +
+                           static_cast<std::size_t>(x0 - spec.x) * pixel_bytes + offset;
+    float* dst =
+        t.plane + static_cast<std::size_t>(y0 - window.y0) * window.width() + (x0 - window.x0);
+    OIIO::convert_image(
+        1, x1 - x0, y1 - y0, 1, src, spec.channelformat(t.channel),
+        static_cast<OIIO::stride_t>(pixel_bytes), static_cast<OIIO::stride_t>(row_bytes),
+        OIIO::AutoStride, dst, OIIO::TypeDesc::FLOAT, sizeof(float),
+        static_cast<OIIO::stride_t>(window.width() * sizeof(float)), OIIO::AutoStride);
+  }
+}
+
 AtomicImageWriter::AtomicImageWriter(const std::string& path, std::vector<OIIO::ImageSpec> parts,
                                      std::string what)
     : path_(path), what_(std::move(what)), parts_(std::move(parts)) {
@@ -170,6 +223,29 @@ void AtomicImageWriter::write_part(OIIO::TypeDesc format, const void* pixels) {
   if (written_ > 0 && !out_->open(tmp_, parts_[written_], OIIO::ImageOutput::AppendSubimage))
     fail(one_line(out_->geterror()));
   if (!out_->write_image(format, pixels)) fail(one_line(out_->geterror()));
+  ++written_;
+}
+
+void AtomicImageWriter::write_part_in_strips(
+    const std::function<void(int y, int rows, std::byte* pixels)>& fill) {
+  assert(out_ && written_ < parts_.size());
+  const OIIO::ImageSpec& spec = parts_[written_];
+  if (written_ > 0 && !out_->open(tmp_, spec, OIIO::ImageOutput::AppendSubimage))
+    fail(one_line(out_->geterror()));
+  const int chunk = spec.tile_width > 0 ? spec.tile_height : lines_per_chunk(spec);
+  const std::size_t row_bytes = spec.scanline_bytes(/*native=*/true);
+  const int rows = chunk * std::max<int>(1, static_cast<int>(kStripBytes / (row_bytes * chunk)));
+  std::vector<std::byte> strip(row_bytes * std::min(rows, spec.height));
+  for (int y = 0; y < spec.height; y += rows) {
+    const int n = std::min(rows, spec.height - y);
+    fill(y, n, strip.data());
+    const bool ok = spec.tile_width > 0
+                        ? out_->write_tiles(spec.x, spec.x + spec.width, spec.y + y, spec.y + y + n,
+                                            spec.z, spec.z + 1, OIIO::TypeUnknown, strip.data())
+                        : out_->write_scanlines(spec.y + y, spec.y + y + n, spec.z,
+                                                OIIO::TypeUnknown, strip.data());
+    if (!ok) fail(one_line(out_->geterror()));
+  }
   ++written_;
 }
 
