@@ -91,7 +91,6 @@ class ProgressDisplay {
       --reused_left_;
     } else if (f.ok) {
       ++computed_;
-      computed_seconds_ += f.seconds;
     }
     if (!f.ok) {
       const std::string& file = f.error_file.empty() ? f.input : f.error_file;
@@ -186,7 +185,9 @@ class ProgressDisplay {
     std::string text = "\r\033[K[" + std::string(filled, '#') + std::string(kWidth - filled, '-') +
                        "] " + std::to_string(done_) + "/" + std::to_string(total_) + " frames";
     if (computed_ > 0) {
-      const double per_frame = computed_seconds_ / computed_;
+      // Wall time: frames are read, lit and written at once, so a frame's own seconds overstate
+      // the rate.
+      const double per_frame = elapsed / computed_;
       const int to_compute = total_ - done_ - reused_left_;
       char rate[64];
       std::snprintf(rate, sizeof rate, "  %.2f s/frame", per_frame);
@@ -208,7 +209,6 @@ class ProgressDisplay {
   bool stopping_ = false, started_ = false, bar_shown_ = false;
   const Clock::time_point start_ = Clock::now();
   int total_ = 0, done_ = 0, reused_left_ = 0, computed_ = 0;
-  double computed_seconds_ = 0;
 };
 
 // --stats: the frames' timings, the settings and the run's outcome, as JSON, written whole or

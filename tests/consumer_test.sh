@@ -11,6 +11,7 @@ cmake --install "$build" --prefix "$work/prefix" > /dev/null
 cmake -S "$src/tests/consumer" -B "$work/build" -G Ninja -DCMAKE_PREFIX_PATH="$work/prefix" \
   > "$work/configure.log" || { cat "$work/configure.log"; exit 1; }
 cmake --build "$work/build" > "$work/build.log" || { cat "$work/build.log"; exit 1; }
-"$work/build/consumer"
+"$work/build/consumer" "$src/testdata/sample/sample.1-2#.exr" "$work/out/o.####.exr"
+test -f "$work/out/o.0001.exr" && test -f "$work/out/o.0002.exr"
 test -f "$work/prefix/share/man/man1/ssgi.1"
 test -x "$work/prefix/bin/ssgi"

@@ -162,22 +162,34 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
                              static_cast<std::uint64_t>((h + scale - 1) / scale);
   threads = std::max(1, threads);
 
-  // A frame as read: the planes of the roles the plan reads (motion both ways), and OIIO's
-  // buffer of the channels while they are converted.
+  // A frame as read: the planes of the roles the plan reads (motion both ways) and the strip
+  // of rows the reader decodes at a time (16 MB); with passthrough, the input's pixels too (4
+  // bytes a channel at most), which stay until the frame is written.
   double read = 0;
   for (int r = 0; r < kRoleCount; ++r) {
     const Role role = static_cast<Role>(r);
     if (!(plan.roles & role_bit(role))) continue;
     read += role == Role::kMotion ? 4 : static_cast<double>(seq.layout.channels(role).size());
   }
-  const std::uint64_t frame = planes(read, pixels);
-  // On the trace grid, what the temporal stage keeps of a frame: its light (3), depth, normal
-  // and motion (8).
+  const double motion = (plan.roles & role_bit(Role::kMotion)) ? 4 : 0;
+  std::uint64_t input_channels = 0;
+  for (const auto& c : seq.channels.channels) input_channels += c.size();
+  const std::uint64_t native = write.passthrough ? planes(input_channels, pixels) : 0;
+  const std::uint64_t strip = 16 * kMiB;
+  const std::uint64_t frame = planes(read, pixels) + native + strip;
+  // The temporal ring: every frame of the window on the trace grid (its light, depth, normal
+  // and motion: 11 planes), and the frames waiting for their window's later frames: their
+  // passes without motion, or with passthrough their input's pixels alone (the passes are
+  // converted from them again).
   const std::uint64_t frame_grid = planes(11, grid);
-  std::uint64_t ring_frames = 1;
-  if (plan.temporal == TemporalMode::kWindow) ring_frames = 2 * s.temporal_radius + 1;
+  std::uint64_t ring_frames = 1, waiting = 0;
+  if (plan.temporal == TemporalMode::kWindow) {
+    ring_frames = 2 * s.temporal_radius + 1;
+    waiting = s.temporal_radius;
+  }
   if (plan.temporal == TemporalMode::kEma) ring_frames = 2;
-  const std::uint64_t ring = ring_frames * (frame + frame_grid);
+  const std::uint64_t ring = ring_frames * frame_grid +
+                             waiting * (write.passthrough ? native : planes(read - motion, pixels));
 
   // Tracing: the reflected light and the trace grid (10 planes and origins), the tracer's
   // hits, then the bounces' light (4 + 3 + 3 planes).
@@ -205,21 +217,25 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
   // (indirect, gi, composite: 10 planes) beside the frame's light.
   const std::uint64_t denoise = plan.denoise || scale > 1 ? planes(24, pixels) : 0;
   const std::uint64_t composite = planes(13, pixels);
-  // The writer: the output's channels, and with passthrough the input's decoded again.
-  std::uint64_t input_channels = 0;
-  for (const auto& c : seq.channels.channels) input_channels += c.size();
-  const std::uint64_t writer =
-      planes(10, pixels) + (write.passthrough ? planes(2.0 * input_channels, pixels) : 0);
+  // The writer encodes strips of rows: ours and the passed-through channels (16 MB).
+  const std::uint64_t writer = strip;
+  // Overlapping, the next frame is read while one is lit and the last written (its layers and,
+  // with passthrough, its input's pixels).
+  const int in_flight = std::clamp(memory.frames_in_flight, 1, 3);
+  const std::uint64_t overlap =
+      (in_flight >= 2 ? frame : 0) + (in_flight >= 3 ? planes(10, pixels) + native + writer : 0);
   // The program, its libraries and the allocator's pools; per worker its stack and buffers.
   const std::uint64_t program = 120 * kMiB + static_cast<std::uint64_t>(threads) * 16 * kMiB;
 
   MemoryEstimate e;
   // The phases of a frame follow one another, but the allocator keeps what each freed, so the
   // bound adds them.
-  e.bytes = program + ring + frame + tracing + denoise + composite + writer;
+  e.bytes = program + ring + frame + tracing + denoise + composite + writer + overlap;
   e.parts = "frames " + memory_size_text(ring + frame) + " (" + std::to_string(ring_frames) +
-            " kept), tracing " + memory_size_text(tracing) + ", denoise and composite " +
-            memory_size_text(denoise + composite) + ", writing " + memory_size_text(writer) +
+            " in the ring, " + std::to_string(waiting) + " waiting), tracing " +
+            memory_size_text(tracing) + ", denoise and composite " +
+            memory_size_text(denoise + composite) + ", writing " + memory_size_text(writer) + ", " +
+            std::to_string(in_flight) + " frames in flight " + memory_size_text(overlap) +
             ", program " + memory_size_text(program);
   return e;
 }
@@ -228,8 +244,13 @@ PipelineMemory pipeline_memory_within(const MemoryLimit& limit, const SequenceIn
                                       const Plan& plan, const GiSettings& s,
                                       const WriteOptions& write, int threads) {
   PipelineMemory memory;
-  if (limit.bytes == 0 || s.tracer != Tracer::kReference) return memory;
-  PipelineMemory none;
+  if (limit.bytes == 0) return memory;
+  // Less overlap before fewer kept hits: as many frames in flight as fit.
+  while (memory.frames_in_flight > 1 &&
+         estimate_run_memory(seq, plan, s, write, threads, memory).bytes > limit.bytes)
+    --memory.frames_in_flight;
+  if (s.tracer != Tracer::kReference) return memory;
+  PipelineMemory none = memory;
   none.reference_hits_bytes = 0;
   const std::uint64_t rest = estimate_run_memory(seq, plan, s, write, threads, none).bytes;
   memory.reference_hits_bytes = static_cast<std::size_t>(std::min<std::uint64_t>(

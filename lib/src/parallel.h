@@ -4,6 +4,11 @@
 #include <tbb/blocked_range.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_pipeline.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <utility>
 
 namespace ssgi::detail {
 
@@ -20,6 +25,34 @@ void parallel_for_rows(int rows, const Body& body) {
 inline int worker_threads() {
   return static_cast<int>(
       tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+}
+
+// Runs items 0, 1, ... through three stages, first(i) -> A, middle(A) -> B, last(B), until
+// first's item index reaches `count` or more_items() turns false. Each stage takes one item at a
+// time and the items in order; up to `in_flight` items are between first and last at once, so
+// that item i + 1's first stage and item i - 1's last overlap with item i's middle (1: one
+// after the other). Each stage's own parallel loops run isolated: a thread waiting for them
+// does not pick up another stage's item meanwhile. A and B must be movable.
+template <typename A, typename B, typename First, typename Middle, typename Last,
+          typename MoreItems>
+void pipeline_in_order(int count, int in_flight, const First& first, const Middle& middle,
+                       const Last& last, const MoreItems& more_items) {
+  int next = 0;
+  const auto in_order = tbb::filter_mode::serial_in_order;
+  tbb::parallel_pipeline(
+      static_cast<std::size_t>(std::max(1, in_flight)),
+      tbb::make_filter<void, A>(in_order, [&](tbb::flow_control& control) -> A {
+        if (next >= count || !more_items()) {
+          control.stop();
+          return A();
+        }
+        const int i = next++;
+        return tbb::this_task_arena::isolate([&] { return first(i); });
+      }) & tbb::make_filter<A, B>(in_order, [&](A a) -> B {
+        return tbb::this_task_arena::isolate([&] { return middle(std::move(a)); });
+      }) & tbb::make_filter<B, void>(in_order, [&](B b) {
+        tbb::this_task_arena::isolate([&] { last(std::move(b)); });
+      }));
 }
 
 }  // namespace ssgi::detail

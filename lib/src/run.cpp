@@ -9,9 +9,9 @@
 #include <map>
 #include <set>
 
-#include "frame_source.h"
 #include "parallel.h"
 #include "preview.h"
+#include "sequence_processor.h"
 #include "ssgi/log.h"
 #include "ssgi/pipeline.h"
 #include "ssgi/settings.h"
@@ -100,6 +100,9 @@ PipelineMemory check_memory(const RunOptions& o, const SequenceInfo& seq) {
                 "the run needs an estimated " + memory_size_text(need.bytes) + " (" + need.parts +
                     "), over the limit of " + memory_size_text(limit.bytes) + " from " +
                     limit.source);
+  if (memory.frames_in_flight < 3)
+    log_info("memory: " + std::to_string(memory.frames_in_flight) +
+             " frames in flight (reading, lighting and writing overlap less) to fit the limit");
   if (o.gi.tracer == Tracer::kReference && o.gi.bounces > 1)
     log_info("memory: the reference keeps up to " + memory_size_text(memory.reference_hits_bytes) +
              " of hits for bounces after the first; rows beyond that are traced again");
@@ -202,64 +205,32 @@ RunReport run_sequence(const RunOptions& options, const RunCallbacks& callbacks)
 
   if (callbacks.on_start)
     callbacks.on_start(total, static_cast<int>(std::count(reuse.begin(), reuse.end(), 1)));
-  detail::FrameSource source(seq, options.input, pipeline);
-  RunReport report;
-  report.total = total;
-  for (int i = 0; i < total; ++i) {
-    const auto start = std::chrono::steady_clock::now();
-    FrameReport fr;
-    fr.frame = seq.frames[i];
-    fr.input = seq.pattern.path_for(fr.frame);
-    fr.output = write_exr ? out.path_for(fr.frame) : "";
-    if (reuse[i]) {
-      fr.ok = fr.skipped = true;
-      report.frames.push_back(fr);
-      if (callbacks.on_frame) callbacks.on_frame(report.frames.back(), i + 1, total);
-      continue;
-    }
-    try {
-      detail::FrameSource::Result lit = source.get(fr.frame);
-      fr.read_ms = source.read_ms();
-      fr.gi_ms = source.gi_ms();
-      const GBuffer& g = *lit.g;
-      fr.sanitized = g.sanitized;
-      const auto composite_start = std::chrono::steady_clock::now();
-      FrameResult result = pipeline.composite(g, std::move(lit.indirect));
-      if (callbacks.on_result) callbacks.on_result(g, result);
-      const auto write_start = std::chrono::steady_clock::now();
-      fr.gi_ms += std::chrono::duration<double, std::milli>(write_start - composite_start).count();
-      if (write_preview)
-        detail::write_preview(preview.path_for(fr.frame), g, result.composite, pipeline.color(),
-                              preview_made_by);
-      if (write_exr) {
-        for (Image* layer : {&result.composite, &result.indirect, &result.gi})
-          pipeline.color().working_to_output(layer);
-        write_frame(fr.output, g,
-                    {{"", &result.composite, {"R", "G", "B", "A"}},
-                     {"indirect", &result.indirect, {"R", "G", "B"}},
-                     {"gi", &result.gi, {"R", "G", "B"}}},
-                    write);
-      }
+  detail::SequenceJob job;
+  job.sequence = &seq;
+  job.input = &options.input;
+  job.pipeline = &pipeline;
+  job.keep_input_pixels = write_exr && options.write.passthrough;
+  job.reuse = reuse;
+  job.output_path = [&](int frame) { return write_exr ? out.path_for(frame) : std::string(); };
+  job.fail_fast = options.fail_fast;
+  job.in_flight = memory.frames_in_flight;
+  job.write_needs_passes = write_preview;
+  job.write = [&](const GBuffer& g, FrameResult& result, const detail::DecodedInput& input) {
+    if (write_preview)
+      detail::write_preview(preview.path_for(g.frame), g, result.composite, pipeline.color(),
+                            preview_made_by);
+    if (write_exr) {
+      for (Image* layer : {&result.composite, &result.indirect, &result.gi})
+        pipeline.color().working_to_output(layer);
+      detail::write_frame(out.path_for(g.frame), g,
+                          {{"", &result.composite, {"R", "G", "B", "A"}},
+                           {"indirect", &result.indirect, {"R", "G", "B"}},
+                           {"gi", &result.gi, {"R", "G", "B"}}},
+                          write, input);
       write.warn_collisions = false;  // one warning per run is enough
-      fr.write_ms =
-          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - write_start)
-              .count();
-      fr.ok = true;
-    } catch (const Error& e) {
-      fr.error_kind = e.kind();
-      fr.error_file = e.file();
-      fr.error = e.what();
-    } catch (const std::bad_alloc&) {
-      fr.error_kind = ErrorKind::kIO;
-      fr.error_file = fr.input;
-      fr.error = "out of memory";
     }
-    fr.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    report.frames.push_back(fr);
-    if (callbacks.on_frame) callbacks.on_frame(report.frames.back(), i + 1, total);
-    if (!fr.ok && options.fail_fast) break;  // the frames after it are not attempted
-  }
-  return report;
+  };
+  return detail::process_sequence(job, callbacks);
 }
 
 }  // namespace ssgi

@@ -1,11 +1,32 @@
-// Parses a frame list and prints the library's version: enough to link against ssgi::ssgi.
+// The README's library example, built against an installed ssgi: what `ssgi run` writes, from a
+// program, through the sequence processor (run_sequence).
 #include <cstdio>
 
-#include "ssgi/sequence.h"
+#include "ssgi/run.h"
+#include "ssgi/settings.h"
+#include "ssgi/threads.h"
 #include "ssgi/version.h"
 
-int main() {
-  const auto frames = ssgi::parse_frame_list("1-5x2");
-  std::printf("ssgi %s: %zu frames\n", ssgi::version(), frames.size());
-  return frames.size() == 3 ? 0 : 1;
+int main(int argc, char** argv) {
+  if (argc != 3) {
+    std::fprintf(stderr, "usage: consumer INPUT OUTPUT (e.g. shot.####.exr out/shot.####.exr)\n");
+    return 2;
+  }
+  const ssgi::ThreadLimit threads(0);  // the scheduler's allocation, else the machine's CPUs
+  ssgi::RunOptions options;
+  options.input.pattern = argv[1];  // every frame on disk, or a range: shot.1-50#.exr
+  options.output = argv[2];
+  ssgi::apply_preset("draft", &options.gi);
+  ssgi::RunCallbacks callbacks;
+  callbacks.on_frame = [](const ssgi::FrameReport& f, int done, int total) {
+    std::printf("%d/%d: %s %s\n", done, total, f.output.c_str(), f.ok ? "written" : f.error.c_str());
+  };
+  try {
+    const ssgi::RunReport report = ssgi::run_sequence(options, callbacks);
+    std::printf("ssgi %s: %d of %d frames failed\n", ssgi::version(), report.failed(), report.total);
+    return report.failed() == 0 ? 0 : 1;
+  } catch (const ssgi::Error& e) {  // the whole run: bad options, no frames, over --max-memory
+    std::fprintf(stderr, "%s: %s\n", e.file().c_str(), e.what());
+    return 1;
+  }
 }

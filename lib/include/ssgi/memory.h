@@ -50,16 +50,17 @@ struct MemoryEstimate {
 
 // An upper bound on the peak of a run of `sequence` with `plan` and `settings` on `threads`
 // workers (the frames the temporal window keeps, the planes each holds, the tracer's hits and
-// scene, the denoiser, the composite and the writer, with or without passthrough), from the
+// scene, the denoiser, the composite and the writer, with or without passthrough, and the
+// frames in flight besides the one lit: memory.frames_in_flight), from the
 // first frame's header alone. Measured against the peak resident size of real runs
 // (tests/bench/memory.sh): a bound within about 2x of it for frames of a megapixel and up.
 MemoryEstimate estimate_run_memory(const SequenceInfo& sequence, const Plan& plan,
                                    const GiSettings& settings, const WriteOptions& write,
                                    int threads, const PipelineMemory& memory);
 
-// The pipeline's memory for a run under `limit`: the reference keeps at most 1 GiB of hits, and
-// no more than what the limit leaves beside the rest of the run (as little as none: then each
-// bounce traces again).
+// The pipeline's memory for a run under `limit`: as many frames in flight (up to 3) as the
+// estimate fits; the reference keeps at most 1 GiB of hits, and no more than what the limit
+// leaves beside the rest of the run (as little as none: then each bounce traces again).
 PipelineMemory pipeline_memory_within(const MemoryLimit& limit, const SequenceInfo& sequence,
                                       const Plan& plan, const GiSettings& settings,
                                       const WriteOptions& write, int threads);

@@ -45,6 +45,9 @@ struct PipelineMemory {
   // The Embree reference keeps, for the bounces after the first, the hits of as many rows as
   // fit in this many bytes (4 per ray), and traces the other rows again for each bounce.
   std::size_t reference_hits_bytes = std::size_t{1} << 30;
+  // Frames between reading and writing at once in run_sequence: 3 reads the next frame and
+  // writes the last while lighting one; 2 overlaps two of those; 1 does one after the other.
+  int frames_in_flight = 3;
 };
 
 class Pipeline {

@@ -42,10 +42,14 @@ struct FrameReport {
   bool skipped = false;                         // ok: the output was already there (skip_existing)
   ErrorKind error_kind = ErrorKind::kInternal;  // when !ok
   std::string error_file, error;                // when !ok
-  double seconds = 0;                           // read + process + write
-  // Milliseconds: decoding and converting inputs (the frame's and its window's new
-  // neighbours'), everything between those and the frame ready to encode (tracing, bounces,
-  // denoise, temporal, composite), and encoding and writing.
+  // The frame's own work, read + process + write (run_sequence reads, lights and writes
+  // different frames at once, so a run takes less than the sum over its frames).
+  double seconds = 0;
+  // Milliseconds of the frame's own work: decoding and converting its input, everything
+  // between that and the frame ready to encode (tracing, bounces, denoise, temporal,
+  // composite), and encoding and writing. A frame read only for the temporal stage (a window's
+  // neighbour outside the frames asked for, the running average's pre-roll) counts with the
+  // frame it serves.
   double read_ms = 0, gi_ms = 0, write_ms = 0;
   std::size_t sanitized = 0;  // input values that were NaN or infinite, read as 0
 };
@@ -64,12 +68,15 @@ struct RunCallbacks {
   std::function<void(int total, int reused)> on_start;
   // After each frame, written, reused or failed; `done` frames of `total` are behind.
   std::function<void(const FrameReport&, int done, int total)> on_frame;
-  // Each frame made (not those reused), before it is written: its G-buffer and results, the
-  // colour passes and results in the working space.
+  // Each frame made (not those reused), before it is written: its G-buffer (without the motion
+  // passes, which only the temporal stage reads) and results, the colour passes and results in
+  // the working space.
   std::function<void(const GBuffer&, const FrameResult&)> on_result;
 };
 
-// Runs the pipeline over the sequence. Errors that concern the whole run (bad options, a
+// Runs the pipeline over the sequence: each input decoded once, and while one frame is lit the
+// next is read and the last written (as many frames in flight as the memory limit allows).
+// Errors that concern the whole run (bad options, a
 // pattern matching nothing, an output that would overwrite an input, or with no_clobber any
 // existing output it would write again) are thrown as ssgi::Error before any frame is written;
 // an error in one frame is recorded in its report and the other frames go on.

@@ -2,14 +2,17 @@
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <limits>
 #include <map>
 #include <memory>
 #include <regex>
 
 #include "camera_header.h"
+#include "input_frame.h"
 #include "oiio_files.h"
 #include "parallel.h"
 #include "ssgi/color.h"
@@ -85,40 +88,6 @@ void check_windows(const SequenceInfo& seq, const OIIO::ImageSpec& spec, const s
   if (data != seq.data_window) throw_input(path, "data window differs from the first frame's");
 }
 
-// Reads the channels `wanted` (by full name) of one subimage, one plane each.
-std::vector<std::vector<float>> read_channels(OIIO::ImageInput& in, int subimage,
-                                              const std::vector<std::string>& wanted,
-                                              const Box2i& data_window, const std::string& path) {
-  if (!in.seek_subimage(subimage, 0))
-    throw_input(path, "has no subimage " + std::to_string(subimage));
-  const OIIO::ImageSpec& spec = in.spec();
-  const Box2i part = data_window_of(spec);
-  std::vector<int> index(wanted.size());
-  for (std::size_t i = 0; i < wanted.size(); ++i) {
-    const auto it = std::find(spec.channelnames.begin(), spec.channelnames.end(), wanted[i]);
-    if (it == spec.channelnames.end()) throw_input(path, "has no channel '" + wanted[i] + "'");
-    index[i] = static_cast<int>(it - spec.channelnames.begin());
-  }
-  std::vector<std::vector<float>> planes = detail::read_float_planes(in, subimage, index, path);
-  if (part == data_window) return planes;
-  // A part with a data window of its own (Nuke writes each part's bounding box): its pixels
-  // where they fall in the frame's window (the first part's), 0 elsewhere, as OpenEXR reads
-  // pixels outside a data window.
-  const int w = data_window.width(), h = data_window.height();
-  const int x0 = std::max(part.x0, data_window.x0), x1 = std::min(part.x1, data_window.x1);
-  const int y0 = std::max(part.y0, data_window.y0), y1 = std::min(part.y1, data_window.y1);
-  std::vector<std::vector<float>> placed(planes.size(),
-                                         std::vector<float>(static_cast<std::size_t>(w) * h));
-  for (std::size_t i = 0; i < planes.size() && x1 > x0; ++i)
-    for (int y = y0; y < y1; ++y)
-      std::copy_n(planes[i].begin() + static_cast<std::ptrdiff_t>(y - part.y0) * part.width() +
-                      (x0 - part.x0),
-                  x1 - x0,
-                  placed[i].begin() + static_cast<std::ptrdiff_t>(y - data_window.y0) * w +
-                      (x0 - data_window.x0));
-  return placed;
-}
-
 // Values beyond this are clamped: sums of a few thousand of them stay finite in float.
 constexpr float kHuge = 1e30f;
 
@@ -127,24 +96,29 @@ float finite_or(float v, float nan_value) {
   return std::clamp(v, -kHuge, kHuge);
 }
 
-// Copies role planes into an Image. A NaN or infinite value is a broken sample, not light or
-// colour: it becomes 0 and is counted in `*non_finite`, so that nothing downstream sees it.
-Image to_image(const std::vector<std::vector<float>>& planes, int w, int h,
-               std::size_t* non_finite) {
-  Image img(w, h, static_cast<int>(planes.size()));
-  for (int c = 0; c < img.channels(); ++c) {
-    float* dst = img.plane(c);
-    for (std::size_t p = 0; p < img.plane_size(); ++p) {
-      const float v = planes[c][p];
-      if (std::isfinite(v)) {
-        dst[p] = std::clamp(v, -kHuge, kHuge);
-      } else {
-        dst[p] = 0.0f;
-        ++*non_finite;
+// A NaN or infinite value of a normal, colour or beauty plane is a broken sample, not light or
+// colour: it becomes 0 and is counted, so that nothing downstream sees it; values beyond kHuge
+// are clamped. Returns the count.
+std::size_t sanitize(Image* image) {
+  const int w = image->width();
+  std::vector<std::size_t> per_row(image->height(), 0);
+  detail::parallel_for_rows(image->height(), [&](int y) {
+    for (int c = 0; c < image->channels(); ++c) {
+      float* row = image->plane(c) + static_cast<std::size_t>(y) * w;
+      for (int x = 0; x < w; ++x) {
+        const float v = row[x];
+        if (std::isfinite(v)) {
+          row[x] = std::clamp(v, -kHuge, kHuge);
+        } else {
+          row[x] = 0.0f;
+          ++per_row[y];
+        }
       }
     }
-  }
-  return img;
+  });
+  std::size_t count = 0;
+  for (std::size_t n : per_row) count += n;
+  return count;
 }
 
 Camera find_camera(const InputOptions& options, const OIIO::ImageSpec& spec, int frame,
@@ -169,8 +143,9 @@ struct DepthCounts {
 DepthCounts convert_depth(Image& depth, DepthKind kind, double background, const Camera& camera,
                           const Box2i& display, const Box2i& data) {
   const float inf = std::numeric_limits<float>::infinity();
-  DepthCounts counts;
-  for (int y = 0; y < depth.height(); ++y) {
+  std::vector<DepthCounts> per_row(depth.height());
+  detail::parallel_for_rows(depth.height(), [&](int y) {
+    DepthCounts& counts = per_row[y];
     for (int x = 0; x < depth.width(); ++x) {
       float& d = depth.at(0, x, y);
       const float v = d;
@@ -199,6 +174,12 @@ DepthCounts convert_depth(Image& depth, DepthKind kind, double background, const
       counts.negative += std::isfinite(v) && v < 0;
       counts.positive += std::isfinite(v) && v > 0;
     }
+  });
+  DepthCounts counts;
+  for (const DepthCounts& row : per_row) {
+    counts.surface += row.surface;
+    counts.negative += row.negative;
+    counts.positive += row.positive;
   }
   return counts;
 }
@@ -226,7 +207,7 @@ void convert_normals(Image& normal, const Image& depth, NormalSpace space, const
   const bool to_camera = space == NormalSpace::kWorld && camera.has_world_transform;
   Mat4d inv;
   if (to_camera) inv = camera.world_to_camera.inverse();
-  for (int y = 0; y < normal.height(); ++y) {
+  detail::parallel_for_rows(normal.height(), [&](int y) {
     for (int x = 0; x < normal.width(); ++x) {
       if (!std::isfinite(depth.at(0, x, y))) {
         for (int c = 0; c < 3; ++c) normal.at(c, x, y) = 0.0f;
@@ -251,7 +232,7 @@ void convert_normals(Image& normal, const Image& depth, NormalSpace space, const
       normal.at(1, x, y) = static_cast<float>(n.y);
       normal.at(2, x, y) = static_cast<float>(n.z);
     }
-  }
+  });
 }
 
 // Unit camera-space normals facing the camera from the depth buffer's pixel derivatives: the
@@ -304,29 +285,30 @@ Image normals_from_depth(const Image& depth, const Camera& camera, const Box2i& 
   return normal;
 }
 
-// Motion in the library's convention: display pixels, +y down, offsets to frame -1 and +1.
-void convert_motion(const std::vector<std::vector<float>>& planes, const MotionConvention& mc,
-                    const Box2i& display, int w, int h, GBuffer* g) {
+// Motion in the library's convention, in place: display pixels, +y down, offsets to frame -1
+// (motion_prev) and +1 (motion_next). `xy` and `zw` hold the stored channels (zw: the third
+// and fourth, or none).
+void convert_motion(Image xy, Image zw, const MotionConvention& mc, const Box2i& display,
+                    GBuffer* g) {
   const double sx = mc.in_ndc ? display.width() : mc.scale;
   const double sy = (mc.in_ndc ? display.height() : mc.scale) * (mc.y_up ? -1.0 : 1.0);
-  Image xy(w, h, 2);
-  for (std::size_t p = 0; p < xy.plane_size(); ++p) {
-    xy.plane(0)[p] = static_cast<float>((finite_or(planes[0][p], 0.0f) + mc.offset) * sx);
-    xy.plane(1)[p] = static_cast<float>((finite_or(planes[1][p], 0.0f) + mc.offset) * sy);
+  const std::size_t n = xy.plane_size();
+  for (std::size_t p = 0; p < n; ++p) {
+    xy.plane(0)[p] = static_cast<float>((finite_or(xy.plane(0)[p], 0.0f) + mc.offset) * sx);
+    xy.plane(1)[p] = static_cast<float>((finite_or(xy.plane(1)[p], 0.0f) + mc.offset) * sy);
   }
   if (mc.xy_to_previous) {
     g->motion_prev = std::move(xy);
   } else {
     g->motion_next = std::move(xy);
   }
-  if (mc.zw_current_minus_next && planes.size() >= 4) {
+  if (mc.zw_current_minus_next && !zw.empty()) {
     // Stored as current - next: the offset to the next frame is its negation.
-    Image next(w, h, 2);
-    for (std::size_t p = 0; p < next.plane_size(); ++p) {
-      next.plane(0)[p] = static_cast<float>(-finite_or(planes[2][p], 0.0f) * sx);
-      next.plane(1)[p] = static_cast<float>(-finite_or(planes[3][p], 0.0f) * sy);
+    for (std::size_t p = 0; p < n; ++p) {
+      zw.plane(0)[p] = static_cast<float>(-finite_or(zw.plane(0)[p], 0.0f) * sx);
+      zw.plane(1)[p] = static_cast<float>(-finite_or(zw.plane(1)[p], 0.0f) * sy);
     }
-    g->motion_next = std::move(next);
+    g->motion_next = std::move(zw);
   }
 }
 
@@ -447,11 +429,20 @@ Camera read_camera(const SequenceInfo& seq, int frame, const InputOptions& optio
   return find_camera(options, in->spec(), frame, seq.display_window, seq.pixel_aspect, path);
 }
 
-GBuffer read_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
-                     const InputOptions& options, const ColorManagement* color) {
-  const std::string path = seq.pattern.path_for(frame);
-  auto in = open_exr(path);
-  const OIIO::ImageSpec spec = in->spec();
+namespace {
+
+// Reads the channels of `targets` of one subimage into their planes (the frame's data window).
+using FillChannels =
+    std::function<void(int subimage, const std::vector<detail::PlaneTarget>& targets)>;
+
+// The G-buffer of `roles` from `input`'s headers, its planes filled by `fill` (from the file or
+// from the kept pixels) and converted to the library's conventions.
+GBuffer convert_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
+                        const InputOptions& options, const ColorManagement* color,
+                        const detail::DecodedInput& input, const FillChannels& fill) {
+  const std::string& path = input.path;
+  assert(!input.parts.empty());
+  const OIIO::ImageSpec& spec = input.parts.front().spec;
   check_windows(seq, spec, path);
 
   GBuffer g;
@@ -462,56 +453,93 @@ GBuffer read_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
   g.camera = find_camera(options, spec, frame, seq.display_window, seq.pixel_aspect, path);
   const int w = g.width(), h = g.height();
 
-  // Group the wanted channels by subimage so that each subimage is read once.
-  std::map<int, std::vector<std::string>> by_subimage;
-  for (int r = 0; r < kRoleCount; ++r) {
-    if (!(roles & role_bit(static_cast<Role>(r)))) continue;
-    if (static_cast<Role>(r) == Role::kNormal && seq.normals_from_depth) continue;
-    for (const ChannelRef& c : seq.layout.roles[r]) by_subimage[c.subimage].push_back(c.name);
-  }
-  std::map<std::pair<int, std::string>, std::vector<float>> planes;
-  for (const auto& [subimage, names] : by_subimage) {
-    auto read = read_channels(*in, subimage, names, seq.data_window, path);
-    for (std::size_t i = 0; i < names.size(); ++i)
-      planes[{subimage, names[i]}] = std::move(read[i]);
-  }
-  auto role_planes = [&](Role role) {
-    std::vector<std::vector<float>> out;
-    for (const ChannelRef& c : seq.layout.channels(role))
-      out.push_back(planes.at({c.subimage, c.name}));
-    return out;
-  };
-  auto wanted = [&](Role role) { return (roles & role_bit(role)) && seq.layout.has(role); };
-
+  // Each role's planes, allocated once and read into straight from the file's strips (no
+  // whole-frame copy besides the G-buffer itself); converted in place afterwards.
   const LayoutPreset& preset = seq.layout.preset;
+  auto wanted = [&](Role role) { return (roles & role_bit(role)) && seq.layout.has(role); };
+  if ((roles & role_bit(Role::kDepth)) && !seq.layout.has(Role::kDepth))
+    throw_input(path, "has no depth channel");
+  const bool read_normals = (roles & role_bit(Role::kNormal)) && !seq.normals_from_depth;
+  if (read_normals && !seq.layout.has(Role::kNormal)) throw_input(path, "has no normal channels");
+  const auto channels = [&](Role role) {
+    return static_cast<int>(seq.layout.channels(role).size());
+  };
+  Image motion_xy, motion_zw;
+  std::map<int, std::vector<std::pair<std::string, float*>>> by_subimage;
+  const auto target = [&](Role role, Image* image, int first, int count) {
+    const std::vector<ChannelRef>& refs = seq.layout.channels(role);
+    for (int c = 0; c < count; ++c)
+      by_subimage[refs[first + c].subimage].emplace_back(refs[first + c].name, image->plane(c));
+  };
+  if (roles & role_bit(Role::kDepth)) {
+    g.depth = Image(w, h, 1);
+    target(Role::kDepth, &g.depth, 0, 1);
+  }
+  if (read_normals) {
+    g.normal = Image(w, h, channels(Role::kNormal));
+    target(Role::kNormal, &g.normal, 0, g.normal.channels());
+  }
+  for (auto [role, image] : {std::pair{Role::kAlbedo, &g.albedo},
+                             {Role::kDirect, &g.direct},
+                             {Role::kEmission, &g.emission}}) {
+    if (!wanted(role)) continue;
+    *image = Image(w, h, channels(role));
+    target(role, image, 0, image->channels());
+  }
+  if (wanted(Role::kMotion)) {
+    const int n = channels(Role::kMotion);
+    motion_xy = Image(w, h, std::min(n, 2));
+    target(Role::kMotion, &motion_xy, 0, motion_xy.channels());
+    if (n >= 4) {
+      motion_zw = Image(w, h, 2);
+      target(Role::kMotion, &motion_zw, 2, 2);
+    }
+  }
+  if (wanted(Role::kBeauty)) {
+    // A beauty without alpha is opaque.
+    const int n = channels(Role::kBeauty);
+    g.beauty = Image(w, h, n < 4 ? n + 1 : n);
+    if (n < 4) std::fill_n(g.beauty.plane(n), g.beauty.plane_size(), 1.0f);
+    target(Role::kBeauty, &g.beauty, 0, n);
+  }
+  for (const auto& [subimage, names] : by_subimage) {
+    if (subimage < 0 || subimage >= static_cast<int>(input.parts.size()))
+      throw_input(path, "has no subimage " + std::to_string(subimage));
+    const std::vector<std::string>& present = input.parts[subimage].spec.channelnames;
+    std::vector<detail::PlaneTarget> targets;
+    for (const auto& [name, plane] : names) {
+      const auto it = std::find(present.begin(), present.end(), name);
+      if (it == present.end()) throw_input(path, "has no channel '" + name + "'");
+      targets.push_back({static_cast<int>(it - present.begin()), plane});
+    }
+    // A part with a data window of its own (Nuke writes each part's bounding box) gives its
+    // pixels where they fall in the frame's window, 0 elsewhere, as OpenEXR reads pixels
+    // outside a data window.
+    fill(subimage, targets);
+  }
+
   std::size_t non_finite = 0;
   if (roles & role_bit(Role::kDepth)) {
-    if (!seq.layout.has(Role::kDepth)) throw_input(path, "has no depth channel");
-    g.depth = Image(w, h, 1);
-    auto depth = role_planes(Role::kDepth);
-    std::copy(depth[0].begin(), depth[0].end(), g.depth.plane(0));
     const DepthCounts counts = convert_depth(g.depth, preset.depth_kind, preset.background_depth,
                                              g.camera, g.display_window, g.data_window);
     warn_if_no_surfaces(counts, g.depth.plane_size(), preset.depth_kind, path);
   }
   if ((roles & role_bit(Role::kNormal)) && seq.normals_from_depth) {
     g.normal = normals_from_depth(g.depth, g.camera, g.display_window, g.data_window);
-  } else if (roles & role_bit(Role::kNormal)) {
-    if (!seq.layout.has(Role::kNormal)) throw_input(path, "has no normal channels");
-    g.normal = to_image(role_planes(Role::kNormal), w, h, &non_finite);
+  } else if (read_normals) {
+    non_finite += sanitize(&g.normal);
     convert_normals(g.normal, g.depth, preset.normal_space, g.camera, g.display_window,
                     g.data_window);
   }
   // Light and albedo into the working space as they are read; depth, normals and motion are
   // data and stay as they are.
-  const auto colour_pass = [&](Role role) {
-    Image image = to_image(role_planes(role), w, h, &non_finite);
-    if (color && image.channels() >= 3) color->input_to_working(&image);
-    return image;
+  const auto colour_pass = [&](Image* image) {
+    non_finite += sanitize(image);
+    if (color && image->channels() >= 3) color->input_to_working(image);
   };
-  if (wanted(Role::kAlbedo)) g.albedo = colour_pass(Role::kAlbedo);
+  if (wanted(Role::kAlbedo)) colour_pass(&g.albedo);
   if (wanted(Role::kDirect)) {
-    g.direct = colour_pass(Role::kDirect);
+    colour_pass(&g.direct);
     if (!preset.direct_includes_albedo) {
       if (g.albedo.empty()) throw_input(path, "direct light excludes albedo but there is none");
       for (int c = 0; c < 3; ++c)
@@ -519,13 +547,11 @@ GBuffer read_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
           g.direct.plane(c)[p] = finite_or(g.direct.plane(c)[p] * g.albedo.plane(c)[p], 0.0f);
     }
   }
-  if (wanted(Role::kEmission)) g.emission = colour_pass(Role::kEmission);
+  if (wanted(Role::kEmission)) colour_pass(&g.emission);
   if (wanted(Role::kMotion))
-    convert_motion(role_planes(Role::kMotion), preset.motion, g.display_window, w, h, &g);
+    convert_motion(std::move(motion_xy), std::move(motion_zw), preset.motion, g.display_window, &g);
   if (wanted(Role::kBeauty)) {
-    auto beauty = role_planes(Role::kBeauty);
-    if (beauty.size() < 4) beauty.emplace_back(static_cast<std::size_t>(w) * h, 1.0f);
-    g.beauty = to_image(beauty, w, h, &non_finite);
+    non_finite += sanitize(&g.beauty);
     if (color) color->input_to_working(&g.beauty);  // R, G, B; alpha is coverage
   }
   g.sanitized = non_finite;
@@ -533,6 +559,42 @@ GBuffer read_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
     log_warning(path + ": " + std::to_string(non_finite) +
                 " NaN or infinite values in normal, albedo, light or beauty channels read as 0");
   return g;
+}
+
+}  // namespace
+
+namespace detail {
+
+InputFrame read_input_frame(const SequenceInfo& seq, int frame, RoleMask roles,
+                            const InputOptions& options, const ColorManagement* color,
+                            bool keep_pixels) {
+  const std::string path = seq.pattern.path_for(frame);
+  auto in = open_exr(path);
+  auto input = std::make_shared<DecodedInput>(decode_input(*in, path, keep_pixels));
+  const FillChannels fill = [&](int subimage, const std::vector<PlaneTarget>& targets) {
+    if (keep_pixels)
+      float_channels_from(*input, subimage, targets, seq.data_window);
+    else
+      read_float_channels(*in, subimage, targets, seq.data_window, path);
+  };
+  GBuffer g = convert_gbuffer(seq, frame, roles, options, color, *input, fill);
+  return {std::move(g), std::move(input)};
+}
+
+GBuffer gbuffer_from_input(const SequenceInfo& seq, int frame, RoleMask roles,
+                           const InputOptions& options, const ColorManagement* color,
+                           const DecodedInput& input) {
+  const FillChannels fill = [&](int subimage, const std::vector<PlaneTarget>& targets) {
+    float_channels_from(input, subimage, targets, seq.data_window);
+  };
+  return convert_gbuffer(seq, frame, roles, options, color, input, fill);
+}
+
+}  // namespace detail
+
+GBuffer read_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
+                     const InputOptions& options, const ColorManagement* color) {
+  return detail::read_input_frame(seq, frame, roles, options, color, false).g;
 }
 
 }  // namespace ssgi

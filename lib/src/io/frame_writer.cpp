@@ -4,12 +4,14 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <memory>
 #include <set>
 
+#include "input_frame.h"
 #include "oiio_files.h"
 #include "ssgi/error.h"
 #include "ssgi/io.h"
@@ -51,41 +53,24 @@ Box2i data_window_of(const OIIO::ImageSpec& spec) {
   return {spec.x, spec.y, spec.x + spec.width, spec.y + spec.height};
 }
 
-// One part of the input, as the output will carry it.
-struct InputPart {
-  int subimage = 0;
-  OIIO::ImageSpec spec;
-  bool has_mip_levels = false;
-};
-
-std::vector<InputPart> input_parts(OIIO::ImageInput& in) {
-  std::vector<InputPart> parts;
-  for (int s = 0; in.seek_subimage(s, 0); ++s) {
-    InputPart part;
-    part.subimage = s;
-    part.spec = in.spec();
-    part.has_mip_levels = in.seek_subimage(s, 1);
-    parts.push_back(std::move(part));
-  }
-  return parts;
+std::string part_label(const detail::DecodedInput& input, int subimage) {
+  const std::string name = input.parts[subimage].spec.get_string_attribute("oiio:subimagename");
+  return "part " + std::to_string(subimage) + (name.empty() ? "" : " (" + name + ")");
 }
 
-std::string part_label(const InputPart& part) {
-  const std::string name = part.spec.get_string_attribute("oiio:subimagename");
-  return "part " + std::to_string(part.subimage) + (name.empty() ? "" : " (" + name + ")");
-}
-
-// Our channels, interleaved in front of the host part's native pixels (if any), in the
-// output's per-channel formats. Counts the values clamped to the half range in *clamped.
-std::vector<std::byte> interleave_host_part(const std::vector<const float*>& ours, bool half,
-                                            const std::vector<std::byte>& host_native,
-                                            std::size_t host_pixel_bytes, std::size_t pixels,
-                                            std::size_t* clamped) {
+// Rows [y, y + rows) of our channels, interleaved in front of the host part's kept pixels (if
+// any), in the output's per-channel formats. Counts the values clamped to the half range in
+// *clamped.
+void interleave_host_rows(const std::vector<const float*>& ours, bool half,
+                          const std::byte* host_pixels, std::size_t host_pixel_bytes, int width,
+                          int y, int rows, std::byte* out, std::size_t* clamped) {
   const std::size_t our_bytes = ours.size() * (half ? sizeof(Imath::half) : sizeof(float));
   const std::size_t stride = our_bytes + host_pixel_bytes;
-  std::vector<std::byte> out(stride * pixels);
-  for (std::size_t p = 0; p < pixels; ++p) {
-    std::byte* px = out.data() + p * stride;
+  const std::size_t first = static_cast<std::size_t>(y) * width;
+  const std::size_t count = static_cast<std::size_t>(rows) * width;
+  for (std::size_t i = 0; i < count; ++i) {
+    const std::size_t p = first + i;
+    std::byte* px = out + i * stride;
     for (std::size_t c = 0; c < ours.size(); ++c) {
       float v = ours[c][p];
       if (half) {
@@ -101,9 +86,8 @@ std::vector<std::byte> interleave_host_part(const std::vector<const float*>& our
       }
     }
     if (host_pixel_bytes)
-      std::memcpy(px + our_bytes, host_native.data() + p * host_pixel_bytes, host_pixel_bytes);
+      std::memcpy(px + our_bytes, host_pixels + p * host_pixel_bytes, host_pixel_bytes);
   }
-  return out;
 }
 
 }  // namespace
@@ -167,11 +151,18 @@ void make_output_directory(const std::string& path) {
 void write_frame(const std::string& path, const GBuffer& frame,
                  const std::vector<OutputLayer>& layers, const WriteOptions& options) {
   check_output_directory(path);
-  // The input is opened once: its headers for the metadata, its pixels to pass through.
   auto in = detail::open_image(frame.path);
-  const std::vector<InputPart> parts = input_parts(*in);
+  const detail::DecodedInput input = detail::decode_input(*in, frame.path, options.passthrough);
+  in.reset();
+  detail::write_frame(path, frame, layers, options, input);
+}
+
+void detail::write_frame(const std::string& path, const GBuffer& frame,
+                         const std::vector<OutputLayer>& layers, const WriteOptions& options,
+                         const DecodedInput& input) {
+  check_output_directory(path);
+  const std::vector<DecodedInput::Part>& parts = input.parts;
   const Box2i& data = frame.data_window;
-  const std::size_t pixels = static_cast<std::size_t>(data.width()) * data.height();
 
   // Our channels go into the first input part that covers the same pixels (the host), in front
   // of its own channels; every other part is copied as it is, in its own types and windows.
@@ -205,7 +196,7 @@ void write_frame(const std::string& path, const GBuffer& frame,
   for (const auto& [name, value] : options.provenance) host_spec.attribute(name, value);
   host_spec.attribute("compression", options.compression);
 
-  std::vector<std::byte> host_native;
+  const std::byte* host_pixels = nullptr;
   std::size_t host_pixel_bytes = 0;
   const bool passthrough = options.passthrough;
   if (passthrough && host >= 0) {
@@ -233,7 +224,8 @@ void write_frame(const std::string& path, const GBuffer& frame,
     host_spec.tile_height = hs.tile_height;
     host_spec.tile_depth = hs.tile_depth;
     host_pixel_bytes = hs.pixel_bytes(/*native=*/true);
-    host_native = detail::read_native_pixels(*in, parts[host].subimage, frame.path);
+    assert(parts[host].pixels.size() == hs.image_bytes(/*native=*/true));
+    host_pixels = parts[host].pixels.data();
   }
   host_spec.nchannels = static_cast<int>(names.size());
   host_spec.channelnames = names;
@@ -252,13 +244,13 @@ void write_frame(const std::string& path, const GBuffer& frame,
   if (passthrough) {
     std::set<std::string> part_names;
     for (std::size_t i = 0; i < parts.size(); ++i) {
-      const InputPart& part = parts[i];
+      const DecodedInput::Part& part = parts[i];
       if (static_cast<int>(i) == host) {
         specs.push_back(host_spec);
         source.push_back(-1);
       } else if (part.spec.deep) {
         if (options.warn_collisions)
-          log_warning(frame.path + ": " + part_label(part) +
+          log_warning(frame.path + ": " + part_label(input, static_cast<int>(i)) +
                       " holds deep data, which ssgi does not pass through");
         continue;
       } else {
@@ -270,7 +262,7 @@ void write_frame(const std::string& path, const GBuffer& frame,
         source.push_back(static_cast<int>(i));
       }
       if (part.has_mip_levels && options.warn_collisions)
-        log_warning(frame.path + ": " + part_label(part) +
+        log_warning(frame.path + ": " + part_label(input, static_cast<int>(i)) +
                     " is mip-mapped: only its full-resolution level is passed through");
     }
     // A multi-part file needs a unique name per part.
@@ -288,24 +280,22 @@ void write_frame(const std::string& path, const GBuffer& frame,
   }
 
   std::size_t clamped = 0;
-  const std::vector<std::byte> host_pixels =
-      interleave_host_part(ours, options.half, host_native, host_pixel_bytes, pixels, &clamped);
-  host_native = {};
+  detail::AtomicImageWriter writer(path, specs, "frame");
+  for (std::size_t k = 0; k < specs.size(); ++k) {
+    if (source[k] < 0) {
+      writer.write_part_in_strips([&](int y, int rows, std::byte* strip) {
+        interleave_host_rows(ours, options.half, host_pixels, host_pixel_bytes, data.width(), y,
+                             rows, strip, &clamped);
+      });
+    } else {
+      assert(!parts[source[k]].pixels.empty());
+      writer.write_part(OIIO::TypeUnknown, parts[source[k]].pixels.data());
+    }
+  }
   if (clamped > 0)
     log_warning(path + ": " + std::to_string(clamped) +
                 " values of ssgi's layers beyond the half-float range were clamped to "
                 "+-65504 (--datatype float keeps them)");
-
-  detail::AtomicImageWriter writer(path, specs, "frame");
-  for (std::size_t k = 0; k < specs.size(); ++k) {
-    if (source[k] < 0) {
-      writer.write_part(OIIO::TypeUnknown, host_pixels.data());
-    } else {
-      const std::vector<std::byte> native =
-          detail::read_native_pixels(*in, parts[source[k]].subimage, frame.path);
-      writer.write_part(OIIO::TypeUnknown, native.data());
-    }
-  }
   writer.commit();
 }
 

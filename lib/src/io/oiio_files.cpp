@@ -32,13 +32,80 @@ std::unique_ptr<OIIO::ImageInput> open_image(const std::string& path) {
   return in;
 }
 
+void throw_deep(const std::string& path, int subimage) {
+  throw_input(path, "part " + std::to_string(subimage) +
+                        " holds deep data, which ssgi does not read yet: flatten it first "
+                        "(oiiotool IN --flatten -o OUT)");
+}
+
 void refuse_deep(OIIO::ImageInput& in, int subimage, const std::string& path) {
   if (!in.seek_subimage(subimage, 0))
     throw_io(path, "cannot read part " + std::to_string(subimage));
-  if (in.spec().deep)
-    throw_input(path, "part " + std::to_string(subimage) +
-                          " holds deep data, which ssgi does not read yet: flatten it first "
-                          "(oiiotool IN --flatten -o OUT)");
+  if (in.spec().deep) throw_deep(path, subimage);
+}
+
+namespace {
+
+// Scanlines per chunk of a scanline file's compression (OpenEXR's table); unknown: 32.
+int lines_per_chunk(const OIIO::ImageSpec& spec) {
+  const std::string compression = spec.get_string_attribute("compression", "none");
+  const std::string name = compression.substr(0, compression.find(':'));
+  if (name == "none" || name == "rle" || name == "zips") return 1;
+  if (name == "zip" || name == "pxr24") return 16;
+  if (name == "dwab") return 256;
+  return 32;  // piz, b44, b44a, dwaa
+}
+
+// Rows read at once: whole chunks, about this many bytes of float pixels.
+constexpr std::size_t kStripBytes = std::size_t{16} << 20;
+
+}  // namespace
+
+void read_float_channels(OIIO::ImageInput& in, int subimage,
+                         const std::vector<PlaneTarget>& targets, const Box2i& window,
+                         const std::string& path) {
+  if (targets.empty()) return;
+  if (!in.seek_subimage(subimage, 0))
+    throw_io(path, "cannot read part " + std::to_string(subimage));
+  refuse_deep(in, subimage, path);
+  const OIIO::ImageSpec spec = in.spec();
+  int lo = spec.nchannels, hi = -1;
+  for (const PlaneTarget& t : targets) {
+    assert(t.channel >= 0 && t.channel < spec.nchannels);
+    lo = std::min(lo, t.channel);
+    hi = std::max(hi, t.channel);
+  }
+  const int n = hi - lo + 1;
+  // The part's pixels that fall in the window.
+  const int x0 = std::max(spec.x, window.x0), x1 = std::min(spec.x + spec.width, window.x1);
+  const int y0 = std::max(spec.y, window.y0), y1 = std::min(spec.y + spec.height, window.y1);
+  if (x1 <= x0 || y1 <= y0) return;
+  const int chunk = spec.tile_width > 0 ? spec.tile_height : lines_per_chunk(spec);
+  const std::size_t row_bytes = static_cast<std::size_t>(spec.width) * n * sizeof(float);
+  const int rows = chunk * std::max<int>(1, static_cast<int>(kStripBytes / (row_bytes * chunk)));
+  std::vector<float> strip(static_cast<std::size_t>(rows) * spec.width * n);
+  // Strips start on chunk boundaries, which count from the part's top.
+  for (int top = spec.y + (y0 - spec.y) / chunk * chunk; top < y1; top += rows) {
+    const int bottom = std::min(top + rows, spec.y + spec.height);
+    const bool ok =
+        spec.tile_width > 0
+            ? in.read_tiles(subimage, 0, spec.x, spec.x + spec.width, top, bottom, spec.z,
+                            spec.z + 1, lo, hi + 1, OIIO::TypeDesc::FLOAT, strip.data())
+            : in.read_scanlines(subimage, 0, top, bottom, spec.z, lo, hi + 1, OIIO::TypeDesc::FLOAT,
+                                strip.data());
+    if (!ok) throw_io(path, "cannot read pixels: " + one_line(in.geterror()));
+    for (int y = std::max(top, y0); y < std::min(bottom, y1); ++y) {
+      const float* src =
+          strip.data() + (static_cast<std::size_t>(y - top) * spec.width + (x0 - spec.x)) * n;
+      const std::size_t dst_row =
+          static_cast<std::size_t>(y - window.y0) * window.width() + (x0 - window.x0);
+      for (const PlaneTarget& t : targets) {
+        const float* s = src + (t.channel - lo);
+        float* d = t.plane + dst_row;
+        for (int x = 0; x < x1 - x0; ++x) d[x] = s[static_cast<std::size_t>(x) * n];
+      }
+    }
+  }
 }
 
 std::vector<std::vector<float>> read_float_planes(OIIO::ImageInput& in, int subimage,
@@ -47,22 +114,14 @@ std::vector<std::vector<float>> read_float_planes(OIIO::ImageInput& in, int subi
   if (indices.empty()) return {};
   if (!in.seek_subimage(subimage, 0))
     throw_io(path, "cannot read part " + std::to_string(subimage));
-  refuse_deep(in, subimage, path);
   const OIIO::ImageSpec& spec = in.spec();
-  const int lo = *std::min_element(indices.begin(), indices.end());
-  const int hi = *std::max_element(indices.begin(), indices.end());
-  assert(lo >= 0 && hi < spec.nchannels);
-  const int n = hi - lo + 1;
-  const std::size_t pixels = static_cast<std::size_t>(spec.width) * spec.height;
-  std::vector<float> interleaved(pixels * n);
-  if (!in.read_image(subimage, 0, lo, hi + 1, OIIO::TypeDesc::FLOAT, interleaved.data()))
-    throw_io(path, "cannot read pixels: " + one_line(in.geterror()));
-  std::vector<std::vector<float>> planes(indices.size(), std::vector<float>(pixels));
-  for (std::size_t i = 0; i < indices.size(); ++i) {
-    const int c = indices[i] - lo;
-    float* dst = planes[i].data();
-    for (std::size_t p = 0; p < pixels; ++p) dst[p] = interleaved[p * n + c];
-  }
+  const Box2i part = {spec.x, spec.y, spec.x + spec.width, spec.y + spec.height};
+  std::vector<std::vector<float>> planes(
+      indices.size(), std::vector<float>(static_cast<std::size_t>(spec.width) * spec.height));
+  std::vector<PlaneTarget> targets;
+  for (std::size_t i = 0; i < indices.size(); ++i)
+    targets.push_back({indices[i], planes[i].data()});
+  read_float_channels(in, subimage, targets, part, path);
   return planes;
 }
 
@@ -75,6 +134,56 @@ std::vector<std::byte> read_native_pixels(OIIO::ImageInput& in, int subimage,
   if (!in.read_image(subimage, 0, 0, spec.nchannels, OIIO::TypeUnknown, pixels.data()))
     throw_io(path, "cannot read pixels: " + one_line(in.geterror()));
   return pixels;
+}
+
+std::size_t DecodedInput::pixel_bytes() const {
+  std::size_t bytes = 0;
+  for (const Part& part : parts) bytes += part.pixels.size();
+  return bytes;
+}
+
+DecodedInput decode_input(OIIO::ImageInput& in, const std::string& path, bool keep_pixels) {
+  DecodedInput input;
+  input.path = path;
+  for (int s = 0; in.seek_subimage(s, 0); ++s) {
+    DecodedInput::Part part;
+    part.spec = in.spec();
+    part.has_mip_levels = in.seek_subimage(s, 1);
+    input.parts.push_back(std::move(part));
+  }
+  in.geterror();  // seek_subimage past the last part leaves a message
+  if (keep_pixels)
+    for (std::size_t s = 0; s < input.parts.size(); ++s)
+      if (!input.parts[s].spec.deep)
+        input.parts[s].pixels = read_native_pixels(in, static_cast<int>(s), path);
+  return input;
+}
+
+void float_channels_from(const DecodedInput& input, int subimage,
+                         const std::vector<PlaneTarget>& targets, const Box2i& window) {
+  if (targets.empty()) return;
+  assert(subimage >= 0 && subimage < static_cast<int>(input.parts.size()));
+  const DecodedInput::Part& part = input.parts[subimage];
+  const OIIO::ImageSpec& spec = part.spec;
+  if (spec.deep) throw_deep(input.path, subimage);
+  assert(part.pixels.size() == spec.image_bytes(/*native=*/true));
+  const int x0 = std::max(spec.x, window.x0), x1 = std::min(spec.x + spec.width, window.x1);
+  const int y0 = std::max(spec.y, window.y0), y1 = std::min(spec.y + spec.height, window.y1);
+  if (x1 <= x0 || y1 <= y0) return;
+  const std::size_t pixel_bytes = spec.pixel_bytes(/*native=*/true);
+  const std::size_t row_bytes = pixel_bytes * spec.width;
+  for (const PlaneTarget& t : targets) {
+    const std::size_t offset = spec.pixel_bytes(0, t.channel, /*native=*/true);
+    const std::byte* src = part.pixels.data() + static_cast<std::size_t>(y0 - spec.y) * row_bytes +
+                           static_cast<std::size_t>(x0 - spec.x) * pixel_bytes + offset;
+    float* dst =
+        t.plane + static_cast<std::size_t>(y0 - window.y0) * window.width() + (x0 - window.x0);
+    OIIO::convert_image(
+        1, x1 - x0, y1 - y0, 1, src, spec.channelformat(t.channel),
+        static_cast<OIIO::stride_t>(pixel_bytes), static_cast<OIIO::stride_t>(row_bytes),
+        OIIO::AutoStride, dst, OIIO::TypeDesc::FLOAT, sizeof(float),
+        static_cast<OIIO::stride_t>(window.width() * sizeof(float)), OIIO::AutoStride);
+  }
 }
 
 AtomicImageWriter::AtomicImageWriter(const std::string& path, std::vector<OIIO::ImageSpec> parts,
@@ -114,6 +223,29 @@ void AtomicImageWriter::write_part(OIIO::TypeDesc format, const void* pixels) {
   if (written_ > 0 && !out_->open(tmp_, parts_[written_], OIIO::ImageOutput::AppendSubimage))
     fail(one_line(out_->geterror()));
   if (!out_->write_image(format, pixels)) fail(one_line(out_->geterror()));
+  ++written_;
+}
+
+void AtomicImageWriter::write_part_in_strips(
+    const std::function<void(int y, int rows, std::byte* pixels)>& fill) {
+  assert(out_ && written_ < parts_.size());
+  const OIIO::ImageSpec& spec = parts_[written_];
+  if (written_ > 0 && !out_->open(tmp_, spec, OIIO::ImageOutput::AppendSubimage))
+    fail(one_line(out_->geterror()));
+  const int chunk = spec.tile_width > 0 ? spec.tile_height : lines_per_chunk(spec);
+  const std::size_t row_bytes = spec.scanline_bytes(/*native=*/true);
+  const int rows = chunk * std::max<int>(1, static_cast<int>(kStripBytes / (row_bytes * chunk)));
+  std::vector<std::byte> strip(row_bytes * std::min(rows, spec.height));
+  for (int y = 0; y < spec.height; y += rows) {
+    const int n = std::min(rows, spec.height - y);
+    fill(y, n, strip.data());
+    const bool ok = spec.tile_width > 0
+                        ? out_->write_tiles(spec.x, spec.x + spec.width, spec.y + y, spec.y + y + n,
+                                            spec.z, spec.z + 1, OIIO::TypeUnknown, strip.data())
+                        : out_->write_scanlines(spec.y + y, spec.y + y + n, spec.z,
+                                                OIIO::TypeUnknown, strip.data());
+    if (!ok) fail(one_line(out_->geterror()));
+  }
   ++written_;
 }
 

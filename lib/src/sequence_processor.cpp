@@ -1,0 +1,495 @@
+#include "sequence_processor.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <climits>
+#include <condition_variable>
+#include <deque>
+#include <exception>
+#include <future>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <set>
+#include <thread>
+#include <utility>
+
+#include "parallel.h"
+#include "ssgi/error.h"
+#include "ssgi/log.h"
+#include "temporal.h"
+
+namespace ssgi::detail {
+namespace {
+
+// The EMA's pre-roll: its head start's influence on the first written frame stays below this
+// fraction of the largest indirect value (see ema_preroll_frames).
+constexpr double kEmaPrerollBound = 1e-3;
+
+constexpr int kNoFrame = INT_MIN;
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+// One step of a run: at most one input decoded and lit, then perhaps one frame finished. The
+// steps are planned before the run from the frames asked for and the temporal stage alone, so
+// that reading can go ahead of lighting.
+struct Step {
+  int read = kNoFrame;   // the frame on disk decoded and lit at this step
+  int output = -1;       // the index (in the frames asked for) of the frame these steps serve
+  bool restart = false;  // EMA: the running average starts again at `read`
+  bool finish = false;   // the frame `output` is finished (or reused) after this step
+};
+
+// The steps of a run, mirroring what the temporal stage needs: for each frame written, the
+// frames on disk within its window that the ring does not hold yet (the ring drops the frames
+// outside the window first), or the running average's steps up to it (continued from the last
+// frame written when it came shortly before, else a pre-roll), or the frame alone.
+std::vector<Step> plan_steps(const SequenceInfo& seq, TemporalMode mode, int radius, int preroll,
+                             const std::vector<char>& reuse) {
+  const std::vector<int>& disk = seq.frames_on_disk;
+  std::vector<Step> steps;
+  std::set<int> ring;
+  int ema_last = -1;
+  for (int i = 0; i < static_cast<int>(seq.frames.size()); ++i) {
+    const int n = seq.frames[i];
+    const std::size_t first = steps.size();
+    if (!reuse[i]) {
+      switch (mode) {
+        case TemporalMode::kNone:
+          steps.push_back({n, i});
+          break;
+        case TemporalMode::kWindow:
+          for (auto it = ring.begin(); it != ring.end();)
+            it = std::abs(*it - n) > radius ? ring.erase(it) : std::next(it);
+          for (int f : disk)
+            if (std::abs(f - n) <= radius && ring.insert(f).second) steps.push_back({f, i});
+          break;
+        case TemporalMode::kEma: {
+          const int target =
+              static_cast<int>(std::lower_bound(disk.begin(), disk.end(), n) - disk.begin());
+          // Counted in frames on disk (averaging steps), not frame numbers.
+          const bool follows = ema_last >= 0 && ema_last < target && target - ema_last <= preroll;
+          const int start = follows ? ema_last + 1 : std::max(0, target - preroll);
+          for (int d = start; d <= target; ++d)
+            steps.push_back({disk[d], i, !follows && d == start});
+          ema_last = target;
+          break;
+        }
+      }
+    }
+    if (steps.size() == first) steps.push_back({kNoFrame, i});
+    steps.back().finish = true;
+  }
+  return steps;
+}
+
+struct FrameError {
+  ErrorKind kind = ErrorKind::kInternal;
+  std::string file, what;
+};
+
+// A G-buffer's description without its planes: what writing a frame reads of it.
+GBuffer without_planes(const GBuffer& g) {
+  GBuffer out;
+  out.path = g.path;
+  out.frame = g.frame;
+  out.display_window = g.display_window;
+  out.data_window = g.data_window;
+  out.camera = g.camera;
+  out.sanitized = g.sanitized;
+  return out;
+}
+
+FrameError error_of(const Error& e) { return {e.kind(), e.file(), e.what()}; }
+
+[[noreturn]] void rethrow(const FrameError& e) { throw Error(e.kind, e.file, e.what); }
+
+// Functions run on the thread that called process_sequence, posted from the pipeline's.
+class CallerThread {
+ public:
+  void post(std::function<void()> f) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      tasks_.push_back(std::move(f));
+    }
+    cv_.notify_one();
+  }
+  // Runs `f` there and waits for it; its exception comes back here.
+  void call(const std::function<void()>& f) {
+    std::promise<void> done;
+    post([&] {
+      try {
+        f();
+        done.set_value();
+      } catch (...) {
+        done.set_exception(std::current_exception());
+      }
+    });
+    done.get_future().get();
+  }
+  void close() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      closed_ = true;
+    }
+    cv_.notify_one();
+  }
+  // Runs what is posted until close().
+  void run() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    while (true) {
+      cv_.wait(lock, [&] { return closed_ || !tasks_.empty(); });
+      if (tasks_.empty()) return;
+      std::function<void()> f = std::move(tasks_.front());
+      tasks_.pop_front();
+      lock.unlock();
+      f();
+      lock.lock();
+    }
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::deque<std::function<void()>> tasks_;
+  bool closed_ = false;
+};
+
+// What the reading stage hands on: a step and its frame decoded (or why not).
+struct Decoded {
+  Step step;
+  std::optional<InputFrame> frame;
+  std::optional<FrameError> error;
+  double read_ms = 0;
+};
+
+// What the lighting stage hands on: a frame finished (or reused, or failed), or nothing.
+struct Made {
+  int output = -1;  // index in the frames asked for; -1: no frame finished at this step
+  bool reused = false;
+  std::shared_ptr<const GBuffer> g;
+  std::shared_ptr<const DecodedInput> input;
+  std::shared_ptr<FrameResult> result;
+  std::optional<FrameError> error;
+  double read_ms = 0, gi_ms = 0;
+};
+
+class Processor {
+ public:
+  Processor(const SequenceJob& job, const RunCallbacks& callbacks)
+      : job_(job),
+        seq_(*job.sequence),
+        pipeline_(*job.pipeline),
+        callbacks_(callbacks),
+        mode_(pipeline_.plan().temporal),
+        radius_(pipeline_.settings().temporal_radius) {
+    const int preroll =
+        mode_ == TemporalMode::kEma
+            ? std::min(ema_preroll_frames(pipeline_.settings().ema_alpha, kEmaPrerollBound),
+                       static_cast<int>(seq_.frames_on_disk.size()))
+            : 0;
+    steps_ = plan_steps(seq_, mode_, radius_, preroll, job.reuse);
+    for (int i = 0; i < static_cast<int>(seq_.frames.size()); ++i)
+      if (!job.reuse[i]) output_index_[seq_.frames[i]] = i;
+  }
+
+  RunReport run() {
+    report_.total = static_cast<int>(seq_.frames.size());
+    std::exception_ptr failure;
+    std::thread worker([&] {
+      try {
+        pipeline_in_order<Decoded, Made>(
+            static_cast<int>(steps_.size()), job_.in_flight, [&](int i) { return read(steps_[i]); },
+            [&](Decoded d) { return light(std::move(d)); }, [&](Made m) { write(std::move(m)); },
+            [&] { return !stopped_.load(); });
+      } catch (...) {
+        failure = std::current_exception();
+      }
+      caller_.close();
+    });
+    caller_.run();
+    worker.join();
+    if (failure) std::rethrow_exception(failure);
+    if (callback_failure_) std::rethrow_exception(callback_failure_);
+    return report_;
+  }
+
+ private:
+  // Whether frame `f`, read for the frame at `output`, is itself still to be written.
+  bool still_to_write(int f, int output) const {
+    const auto it = output_index_.find(f);
+    return it != output_index_.end() && it->second >= output;
+  }
+
+  // Whose times a step's work counts in: the frame it reads when that frame is written, else
+  // the frame the step serves (a neighbour outside the frames asked for, a pre-roll frame).
+  int owner(const Step& s) const {
+    return s.read != kNoFrame && output_index_.count(s.read) ? s.read : seq_.frames[s.output];
+  }
+
+  Decoded read(const Step& step) {
+    Decoded d;
+    d.step = step;
+    if (step.read == kNoFrame) return d;
+    const auto start = Clock::now();
+    try {
+      d.frame = read_input_frame(seq_, step.read, pipeline_.plan().roles, *job_.input,
+                                 &pipeline_.color(), job_.keep_input_pixels);
+    } catch (const Error& e) {
+      d.error = error_of(e);
+    } catch (const std::bad_alloc&) {
+      d.error = FrameError{ErrorKind::kIO, seq_.pattern.path_for(step.read), "out of memory"};
+    }
+    d.read_ms = ms_since(start);
+    return d;
+  }
+
+  Made light(Decoded d) {
+    const Step& s = d.step;
+    const int n = seq_.frames[s.output];
+    const bool made = !job_.reuse[s.output];
+    times_[owner(s)].first += d.read_ms;
+    const auto start = Clock::now();
+    if (mode_ == TemporalMode::kWindow && made)
+      for (auto it = ring_.begin(); it != ring_.end();)
+        it = std::abs(it->first - n) > radius_ ? ring_.erase(it) : std::next(it);
+    std::optional<InputFrame> own;  // frame n, when it is read at the step that finishes it
+    if (s.read != kNoFrame) {
+      try {
+        if (d.error) rethrow(*d.error);
+        own = take(s, std::move(*d.frame));
+        failed_.erase(s.read);
+      } catch (const Error& e) {
+        failed(s.read, error_of(e), n);
+      } catch (const std::bad_alloc&) {
+        failed(s.read, {ErrorKind::kIO, seq_.pattern.path_for(s.read), "out of memory"}, n);
+      }
+    }
+    times_[owner(s)].second += ms_since(start);
+    Made m;
+    if (!s.finish) return m;
+    m.output = s.output;
+    m.reused = !made;
+    if (!made) {
+      times_.erase(n);
+      return m;
+    }
+    const auto finish_start = Clock::now();
+    double convert_ms = 0;
+    try {
+      finish(n, std::move(own), &m, &convert_ms);
+    } catch (const Error& e) {
+      m.error = error_of(e);
+    } catch (const std::bad_alloc&) {
+      m.error = FrameError{ErrorKind::kIO, seq_.pattern.path_for(n), "out of memory"};
+    }
+    std::pair<double, double>& times = times_[n];
+    times.first += convert_ms;
+    times.second += ms_since(finish_start) - convert_ms;
+    m.read_ms = times.first;
+    m.gi_ms = times.second;
+    times_.erase(n);
+    return m;
+  }
+
+  // A frame that could not be read or lit: left out of what follows. A neighbour's failure is
+  // warned about once (the frame's own failure is its error).
+  void failed(int f, const FrameError& e, int n) {
+    failed_.emplace(f, e);
+    if (mode_ == TemporalMode::kEma) {
+      ema_valid_ = false;
+      if (f != n)
+        log_warning((e.file.empty() ? seq_.pattern.path_for(f) : e.file) + ": " + e.what +
+                    "; the running average starts again after it");
+    }
+  }
+
+  // Lights a decoded frame at step `s`: into the ring (window) or the running average (EMA).
+  // Returns it when the step finishes it and it is still needed whole.
+  std::optional<InputFrame> take(const Step& s, InputFrame frame) {
+    const int n = seq_.frames[s.output];
+    if (mode_ == TemporalMode::kNone) return frame;
+    Pipeline::TracedLight traced = pipeline_.trace_light(frame.g);
+    if (mode_ == TemporalMode::kEma) {
+      if (s.restart) ema_valid_ = false;
+      const std::vector<int>& disk = seq_.frames_on_disk;
+      ema_step(static_cast<int>(std::lower_bound(disk.begin(), disk.end(), s.read) - disk.begin()),
+               std::move(traced));
+      if (s.read == n && s.finish) return frame;
+      return std::nullopt;
+    }
+    Lit lit{std::move(traced.grid), std::move(traced.light), nullptr, nullptr};
+    if (still_to_write(s.read, s.output)) {
+      // Kept until the frame is written: its input (headers, and with passthrough its pixels),
+      // and its passes unless they can be converted again from those pixels. Motion only
+      // served the trace grid, which the ring holds.
+      lit.input = frame.input;
+      if (!job_.keep_input_pixels || s.read == n) {
+        frame.g.motion_prev = Image();
+        frame.g.motion_next = Image();
+        lit.g = std::make_shared<const GBuffer>(std::move(frame.g));
+      }
+    }
+    ring_[s.read] = std::move(lit);
+    return std::nullopt;
+  }
+
+  void ema_step(int index, Pipeline::TracedLight traced) {
+    const bool follows = ema_valid_ && ema_index_ == index - 1;
+    ema_out_ = follows ? temporal_ema(traced.grid, traced.light, ema_grid_, ema_out_,
+                                      pipeline_.settings().ema_alpha)
+                       : std::move(traced.light);
+    // The next step reprojects from this frame: its trace grid is all it reads.
+    ema_grid_ = std::move(traced.grid);
+    ema_index_ = index;
+    ema_valid_ = true;
+  }
+
+  // Frame n's light filtered, finished and composited into *m. `own` is frame n as read at this
+  // step, if it was.
+  void finish(int n, std::optional<InputFrame> own, Made* m, double* convert_ms) {
+    if (const auto it = failed_.find(n); it != failed_.end()) rethrow(it->second);
+    Image indirect;
+    if (mode_ == TemporalMode::kWindow) {
+      std::vector<const GBuffer*> frames;
+      std::vector<const Image*> light;
+      int center = -1;
+      for (int f : seq_.frames_on_disk) {
+        if (std::abs(f - n) > radius_) continue;
+        if (const auto it = failed_.find(f); it != failed_.end()) {
+          if (warned_.insert(f).second)
+            log_warning((it->second.file.empty() ? seq_.pattern.path_for(f) : it->second.file) +
+                        ": " + it->second.what + "; left out of the temporal window");
+          continue;
+        }
+        const auto it = ring_.find(f);
+        if (it == ring_.end())
+          throw Error(ErrorKind::kInternal, seq_.pattern.path_for(f),
+                      "frame " + std::to_string(f) + " of the temporal window was not lit");
+        if (f == n) center = static_cast<int>(frames.size());
+        frames.push_back(&it->second.grid);
+        light.push_back(&it->second.light);
+      }
+      Lit& lit = ring_.at(n);
+      if (!lit.g) {
+        const auto start = Clock::now();
+        RoleMask roles = pipeline_.plan().roles & ~role_bit(Role::kMotion);
+        lit.g = std::make_shared<const GBuffer>(
+            gbuffer_from_input(seq_, n, roles, *job_.input, &pipeline_.color(), *lit.input));
+        *convert_ms += ms_since(start);
+      }
+      indirect = pipeline_.finish_light(*lit.g, temporal_window(frames, light, center, radius_));
+      // From now on the frame is only a neighbour: reprojection reads its trace grid.
+      m->g = std::move(lit.g);
+      m->input = std::move(lit.input);
+    } else {
+      if (!own)
+        throw Error(ErrorKind::kInternal, seq_.pattern.path_for(n),
+                    "frame " + std::to_string(n) + " was not read");
+      m->input = std::move(own->input);
+      auto g = std::make_shared<const GBuffer>(std::move(own->g));
+      indirect = mode_ == TemporalMode::kEma ? pipeline_.finish_light(*g, ema_out_)
+                                             : pipeline_.indirect_light(*g);
+      m->g = std::move(g);
+    }
+    m->result = std::make_shared<FrameResult>(pipeline_.composite(*m->g, std::move(indirect)));
+  }
+
+  void write(Made m) {
+    if (m.output < 0 || stopped_) return;
+    FrameReport fr;
+    fr.frame = seq_.frames[m.output];
+    fr.input = seq_.pattern.path_for(fr.frame);
+    fr.output = job_.output_path ? job_.output_path(fr.frame) : "";
+    if (m.reused) {
+      fr.ok = fr.skipped = true;
+    } else {
+      fr.read_ms = m.read_ms;
+      fr.gi_ms = m.gi_ms;
+      try {
+        if (m.error) rethrow(*m.error);
+        fr.sanitized = m.g->sanitized;
+        if (callbacks_.on_result) caller_.call([&] { callbacks_.on_result(*m.g, *m.result); });
+        // The passes go before the frame is encoded unless writing reads them.
+        if (!job_.write_needs_passes) m.g = std::make_shared<const GBuffer>(without_planes(*m.g));
+        const auto start = Clock::now();
+        if (job_.write) job_.write(*m.g, *m.result, *m.input);
+        fr.write_ms = ms_since(start);
+        fr.ok = true;
+      } catch (const Error& e) {
+        fr.error_kind = e.kind();
+        fr.error_file = e.file();
+        fr.error = e.what();
+      } catch (const std::bad_alloc&) {
+        fr.error_kind = ErrorKind::kIO;
+        fr.error_file = fr.input;
+        fr.error = "out of memory";
+      }
+    }
+    fr.seconds = (fr.read_ms + fr.gi_ms + fr.write_ms) / 1000.0;
+    if (!fr.ok && job_.fail_fast) stopped_ = true;  // the frames after it are not attempted
+    const int done = m.output + 1;
+    caller_.post([this, fr, done] {
+      report_.frames.push_back(fr);
+      if (!callbacks_.on_frame || callback_failure_) return;
+      try {
+        callbacks_.on_frame(report_.frames.back(), done, report_.total);
+      } catch (...) {
+        callback_failure_ = std::current_exception();
+        stopped_ = true;
+      }
+    });
+  }
+
+  // A frame in the window's ring.
+  struct Lit {
+    GBuffer grid;                      // its trace grid, what reprojection reads
+    Image light;                       // its light on the grid, before temporal filtering
+    std::shared_ptr<const GBuffer> g;  // while it is still to be written (or converted again)
+    std::shared_ptr<const DecodedInput> input;  // while it is still to be written
+  };
+
+  const SequenceJob& job_;
+  const SequenceInfo& seq_;
+  const Pipeline& pipeline_;
+  const RunCallbacks& callbacks_;
+  const TemporalMode mode_;
+  const int radius_;
+  std::vector<Step> steps_;
+  std::map<int, int> output_index_;  // frames to make -> their index in seq_.frames
+
+  // The lighting stage's state.
+  std::map<int, Lit> ring_;
+  std::map<int, FrameError> failed_;                // frames that could not be read or lit
+  std::set<int> warned_;                            // of those, the ones warned about as neighbours
+  std::map<int, std::pair<double, double>> times_;  // per frame: read_ms, gi_ms so far
+  int ema_index_ = 0;
+  bool ema_valid_ = false;
+  GBuffer ema_grid_;  // the last frame stepped's trace grid
+  Image ema_out_;     // its filtered light on the grid
+
+  std::atomic<bool> stopped_{false};
+  CallerThread caller_;
+  // Owned by the calling thread.
+  RunReport report_;
+  std::exception_ptr callback_failure_;
+};
+
+}  // namespace
+
+int frames_waiting(TemporalMode mode, int temporal_radius) {
+  return mode == TemporalMode::kWindow ? temporal_radius : 0;
+}
+
+RunReport process_sequence(const SequenceJob& job, const RunCallbacks& callbacks) {
+  Processor processor(job, callbacks);
+  return processor.run();
+}
+
+}  // namespace ssgi::detail

@@ -1,0 +1,49 @@
+// The frame loop of a run (internal): each input decoded once, lit, filtered over the temporal
+// ring, composited and written, as a pipeline of frames in which reading the next input and
+// writing the last output overlap with computing the current one.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "input_frame.h"
+#include "ssgi/pipeline.h"
+#include "ssgi/run.h"
+
+namespace ssgi::detail {
+
+// Writes a frame the run made (the EXR, the preview): its G-buffer, its results (which it may
+// convert in place) and its input as read. Throws ssgi::Error.
+using WriteMadeFrame = std::function<void(const GBuffer&, FrameResult&, const DecodedInput&)>;
+
+struct SequenceJob {
+  const SequenceInfo* sequence = nullptr;
+  const InputOptions* input = nullptr;
+  const Pipeline* pipeline = nullptr;
+  // Passthrough: each input's pixels are kept, in their own formats, until its frame is
+  // written; the G-buffer of a frame that waits for its window's later frames is converted from
+  // them again rather than kept beside them.
+  bool keep_input_pixels = false;
+  std::vector<char> reuse;  // per frame of sequence->frames: already there, not made again
+  std::function<std::string(int frame)> output_path;  // for the reports; "" when none
+  WriteMadeFrame write;
+  bool write_needs_passes = false;  // `write` reads the G-buffer's planes (the preview does)
+  bool fail_fast = false;
+  // Frames between reading and writing at once: 3 overlaps reading, computing and writing; 1
+  // runs them one after the other (the least memory).
+  int in_flight = 3;
+};
+
+// Runs `job` as run_sequence documents it (reports in frame order, callbacks on the calling
+// thread). Frames the temporal stage needs besides those written (the window's neighbours on
+// disk, the running average's pre-roll) are read and lit once each, and a frame's passes are
+// kept only until it is written.
+RunReport process_sequence(const SequenceJob& job, const RunCallbacks& callbacks);
+
+// The ring the temporal stage keeps is bounded by its window: how many frames' G-buffers (or,
+// with keep_input_pixels, inputs) wait at most for their window's later frames, besides the
+// frame being lit and those in flight.
+int frames_waiting(TemporalMode mode, int temporal_radius);
+
+}  // namespace ssgi::detail
