@@ -259,6 +259,11 @@ const std::vector<OptionSpec> kTable = {
      "(500M, 2G or bytes; default: the scheduler's limit, Slurm's allocation or the cgroup's; "
      "-v says which)",
      nullptr},
+    {kFramesInFlight, "frames-in-flight", 0, "N", OptionGroup::kGeneral,
+     kRunCommand | kReferenceCommand,
+     "frames read, lit and written at once: 1 (one after the other, the least memory) to 3; "
+     "fewer when --max-memory needs it",
+     [](const RunOptions&) { return std::to_string(ssgi::PipelineMemory().frames_in_flight); }},
     {kSimd, "simd", 0, "TARGET", OptionGroup::kGeneral, kReading,
      "the kernels' instruction set: auto, a target this CPU has (avx2, sse4, ...; ssgi info "
      "lists them) or scalar; every one gives the same bits (default: $SSGI_SIMD, else auto)",

@@ -89,6 +89,7 @@ enum OptionId : int {
   kPreview,
   kReference,
   kMaxMemory,
+  kFramesInFlight,
 };
 
 enum class OptionGroup { kInput, kGi, kColor, kOutput, kGeneral };

@@ -270,6 +270,9 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
       case kMaxMemory:
         o.run.memory_limit = {ssgi::parse_memory_size(a), "--max-memory"};
         break;
+      case kFramesInFlight:
+        o.run.frames_in_flight = static_cast<int>(parse_long("frames-in-flight", a, 1, 3));
+        break;
       case kCompression:
         o.run.write.compression = ssgi::parse_compression(a);
         break;

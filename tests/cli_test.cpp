@@ -163,8 +163,9 @@ std::string file_bytes(const std::string& path) {
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-const std::vector<std::string> kOurChannels = {
-    "R", "G", "B", "A", "indirect.R", "indirect.G", "indirect.B", "gi.R", "gi.G", "gi.B"};
+const std::vector<std::string> kOurChannels = {"R",          "G",          "B",          "A",
+                                               "indirect.R", "indirect.G", "indirect.B", "gi.R",
+                                               "gi.G",       "gi.B",       "coverage.Y"};
 
 // custom/ holds the sample under names no preset knows.
 const std::vector<std::string> kCustomChannelFlags = {
@@ -426,6 +427,23 @@ TEST_F(Cli, RunWritesOurLayersInputChannelsAndMetadata) {
       EXPECT_EQ(out.planes.at(channel), plane) << channel;
     for (const std::string& c : kOurChannels)
       EXPECT_EQ(out.format_of(c), OIIO::TypeDesc::FLOAT) << c;
+    // Coverage within [0, 1], 0 on background; this interior's surfaces get part of their light
+    // from the miss model and part from traced rays.
+    const auto& coverage = out.planes.at("coverage.Y");
+    const auto& depth = in.planes.at("ViewLayer.Depth.Z");
+    double on_surfaces = 0;
+    int surfaces = 0;
+    for (std::size_t i = 0; i < coverage.size(); ++i) {
+      ASSERT_TRUE(coverage[i] >= 0.0f && coverage[i] <= 1.0f) << coverage[i];
+      if (!(depth[i] < 1e9f)) {
+        EXPECT_EQ(coverage[i], 0.0f);
+        continue;
+      }
+      on_surfaces += coverage[i];
+      ++surfaces;
+    }
+    EXPECT_GT(on_surfaces / surfaces, 0.1);
+    EXPECT_LT(on_surfaces / surfaces, 0.9);
     // Cameras and Blender's attributes kept; provenance added.
     for (const char* attr : {"worldToCamera", "worldToNDC", "BlenderMultiChannel", "Frame"}) {
       const OIIO::ParamValue* a = in.spec.find_attribute(attr);

@@ -425,10 +425,14 @@ TEST(Pipeline, CoverageIsTheShareOfTheLightTheTracedRaysBrought) {
   const Groove groove = make_groove(groove_settings(Tracer::kSlices));
   const GBuffer& g = groove.f.g;
   const int w = g.width(), h = g.height();
-  for (Tracer tracer : kTracers) {
-    SCOPED_TRACE(tracer_name(tracer));
+  // Both tracers from every pixel, and the slices from a trace grid of 2 x 2 blocks (its
+  // coverage carried to the frame's pixels).
+  for (auto [tracer, scale] : {std::pair{Tracer::kSlices, 1}, std::pair{Tracer::kScreenSpace, 1},
+                               std::pair{Tracer::kSlices, 2}}) {
+    SCOPED_TRACE(std::string(tracer_name(tracer)) + " at trace scale " + std::to_string(scale));
     for (float env : {0.5f, 0.0f}) {
       GiSettings s = groove_settings(tracer);
+      s.trace_scale = scale;
       s.env_color = {env, env, env};
       const Pipeline pipeline(groove.f.seq, s);
       Image coverage;
@@ -446,8 +450,10 @@ TEST(Pipeline, CoverageIsTheShareOfTheLightTheTracedRaysBrought) {
           upper += result.coverage.at(0, x, h - 1 - y) - (env > 0 ? 0.0 : f);
           ++n;
         }
-      std::printf("%s, env %.1f: coverage / expected %.4f (dark face), - expected %.4f (lit)\n",
-                  tracer_name(tracer), env, lower / n, upper / n);
+      std::printf(
+          "%s, scale %d, env %.1f: coverage / expected %.4f (dark face), - expected %.4f "
+          "(lit)\n",
+          tracer_name(tracer), scale, env, lower / n, upper / n);
       EXPECT_NEAR(lower / n, 1.0, 0.05);
       EXPECT_NEAR(upper / n, 0.0, 0.03);
     }

@@ -177,11 +177,11 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
   const std::uint64_t native = write.passthrough ? planes(input_channels, pixels) : 0;
   const std::uint64_t strip = 16 * kMiB;
   const std::uint64_t frame = planes(read, pixels) + native + strip;
-  // The temporal ring: every frame of the window on the trace grid (its light, depth, normal
-  // and motion: 11 planes), and the frames waiting for their window's later frames: their
+  // The temporal ring: every frame of the window on the trace grid (its light, coverage, depth,
+  // normal and motion: 12 planes), and the frames waiting for their window's later frames: their
   // passes without motion, or with passthrough their input's pixels alone (the passes are
   // converted from them again).
-  const std::uint64_t frame_grid = planes(11, grid);
+  const std::uint64_t frame_grid = planes(12, grid);
   std::uint64_t ring_frames = 1, waiting = 0;
   if (plan.temporal == TemporalMode::kWindow) {
     ring_frames = 2 * s.temporal_radius + 1;
@@ -213,17 +213,17 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
     }
   }
   const std::uint64_t tracing = planes(3, pixels) + planes(11, grid) + tracer + planes(10, grid);
-  // The denoiser's pyramid and guides at full resolution, and the composite's three layers
-  // (indirect, gi, composite: 10 planes) beside the frame's light.
+  // The denoiser's pyramid and guides at full resolution, and the composite's four layers
+  // (indirect, gi, composite, coverage: 11 planes) beside the frame's light.
   const std::uint64_t denoise = plan.denoise || scale > 1 ? planes(24, pixels) : 0;
-  const std::uint64_t composite = planes(13, pixels);
+  const std::uint64_t composite = planes(14, pixels);
   // The writer encodes strips of rows: ours and the passed-through channels (16 MB).
   const std::uint64_t writer = strip;
   // Overlapping, the next frame is read while one is lit and the last written (its layers and,
   // with passthrough, its input's pixels).
   const int in_flight = std::clamp(memory.frames_in_flight, 1, 3);
   const std::uint64_t overlap =
-      (in_flight >= 2 ? frame : 0) + (in_flight >= 3 ? planes(10, pixels) + native + writer : 0);
+      (in_flight >= 2 ? frame : 0) + (in_flight >= 3 ? planes(11, pixels) + native + writer : 0);
   // The program, its libraries and the allocator's pools; per worker its stack and buffers.
   const std::uint64_t program = 120 * kMiB + static_cast<std::uint64_t>(threads) * 16 * kMiB;
 
@@ -242,8 +242,10 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
 
 PipelineMemory pipeline_memory_within(const MemoryLimit& limit, const SequenceInfo& seq,
                                       const Plan& plan, const GiSettings& s,
-                                      const WriteOptions& write, int threads) {
+                                      const WriteOptions& write, int threads,
+                                      int frames_in_flight) {
   PipelineMemory memory;
+  memory.frames_in_flight = std::clamp(frames_in_flight, 1, 3);
   if (limit.bytes == 0) return memory;
   // Less overlap before fewer kept hits: as many frames in flight as fit.
   while (memory.frames_in_flight > 1 &&

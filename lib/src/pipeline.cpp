@@ -276,41 +276,21 @@ Image Pipeline::Impl::trace(const GBuffer& g, GBuffer* grid_out, Image* coverage
                                 coverage);
 }
 
-namespace {
-
-// A 1-channel image as the 3 channels the denoiser carries, and back.
-Image three_channels(const Image& one) {
-  Image out(one.width(), one.height(), 3);
-  for (int c = 0; c < 3; ++c) std::copy_n(one.plane(0), one.plane_size(), out.plane(c));
-  return out;
-}
-Image first_channel(const Image& three) {
-  Image out(three.width(), three.height(), 1);
-  std::copy_n(three.plane(0), three.plane_size(), out.plane(0));
-  return out;
-}
-
-}  // namespace
-
 Pipeline::TracedLight Pipeline::trace_light(const GBuffer& g) const {
   TracedLight out;
   out.light = impl_->trace(g, &out.grid, &out.coverage);
   const int level = pyramid_level(impl_->plan.trace_scale);
-  if (impl_->plan.denoise) {
-    const DenoiseSettings& d = impl_->settings.denoise_settings;
-    out.light = detail::upsample_and_denoise(out.light, level, g.depth, g.normal, d, true, level);
-    out.coverage = first_channel(detail::upsample_and_denoise(three_channels(out.coverage), level,
-                                                              g.depth, g.normal, d, true, level));
-  }
+  if (impl_->plan.denoise)
+    out.light = detail::upsample_and_denoise(out.light, level, g.depth, g.normal,
+                                             impl_->settings.denoise_settings, true, level);
   return out;
 }
 
-Image Pipeline::finish_coverage(const GBuffer& g, const Image& grid_coverage) const {
-  const int level = pyramid_level(impl_->plan.trace_scale);
-  if (level == 0) return grid_coverage;
-  return first_channel(detail::upsample_and_denoise(three_channels(grid_coverage), level, g.depth,
-                                                    g.normal, impl_->settings.denoise_settings,
-                                                    false));
+Image Pipeline::finish_coverage(const GBuffer& g, const GBuffer& grid,
+                                const Image& grid_coverage) const {
+  return detail::coverage_to_frame(grid_coverage, grid.depth, grid.normal, impl_->plan.trace_scale,
+                                   static_cast<float>(impl_->settings.thickness), g.depth,
+                                   g.normal);
 }
 
 Image Pipeline::finish_light(const GBuffer& g, const Image& grid_light) const {
@@ -327,13 +307,12 @@ Image Pipeline::indirect_light(const GBuffer& g, Image* coverage) const {
   // there.
   const Plan& plan = impl_->plan;
   const int level = pyramid_level(plan.trace_scale);
-  Image light = impl_->trace(g, nullptr, coverage);
+  GBuffer grid;
+  Image light = impl_->trace(g, coverage ? &grid : nullptr, coverage);
+  if (coverage) *coverage = finish_coverage(g, grid, *coverage);
   if (level == 0 && !plan.denoise) return light;
-  const DenoiseSettings& d = impl_->settings.denoise_settings;
-  if (coverage)
-    *coverage = first_channel(detail::upsample_and_denoise(three_channels(*coverage), level,
-                                                           g.depth, g.normal, d, plan.denoise));
-  return detail::upsample_and_denoise(light, level, g.depth, g.normal, d, plan.denoise);
+  return detail::upsample_and_denoise(light, level, g.depth, g.normal,
+                                      impl_->settings.denoise_settings, plan.denoise);
 }
 
 std::string Pipeline::describe_misses(const GBuffer& g) const {

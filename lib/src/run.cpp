@@ -89,7 +89,10 @@ PipelineMemory check_memory(const RunOptions& o, const SequenceInfo& seq) {
   const Plan plan = make_plan(seq, o.gi);
   const int threads = detail::worker_threads();
   const MemoryLimit& limit = o.memory_limit;
-  const PipelineMemory memory = pipeline_memory_within(limit, seq, plan, o.gi, o.write, threads);
+  const int in_flight =
+      o.frames_in_flight > 0 ? o.frames_in_flight : PipelineMemory().frames_in_flight;
+  const PipelineMemory memory =
+      pipeline_memory_within(limit, seq, plan, o.gi, o.write, threads, in_flight);
   const MemoryEstimate need = estimate_run_memory(seq, plan, o.gi, o.write, threads, memory);
   log_info("memory: estimated peak " + memory_size_text(need.bytes) + " (" + need.parts +
            "); limit " +
@@ -100,7 +103,7 @@ PipelineMemory check_memory(const RunOptions& o, const SequenceInfo& seq) {
                 "the run needs an estimated " + memory_size_text(need.bytes) + " (" + need.parts +
                     "), over the limit of " + memory_size_text(limit.bytes) + " from " +
                     limit.source);
-  if (memory.frames_in_flight < 3)
+  if (memory.frames_in_flight < in_flight)
     log_info("memory: " + std::to_string(memory.frames_in_flight) +
              " frames in flight (reading, lighting and writing overlap less) to fit the limit");
   if (o.gi.tracer == Tracer::kReference && o.gi.bounces > 1)
@@ -222,11 +225,11 @@ RunReport run_sequence(const RunOptions& options, const RunCallbacks& callbacks)
     if (write_exr) {
       for (Image* layer : {&result.composite, &result.indirect, &result.gi})
         pipeline.color().working_to_output(layer);
-      detail::write_frame(out.path_for(g.frame), g,
-                          {{"", &result.composite, {"R", "G", "B", "A"}},
-                           {"indirect", &result.indirect, {"R", "G", "B"}},
-                           {"gi", &result.gi, {"R", "G", "B"}}},
-                          write, input);
+      std::vector<OutputLayer> layers = {{"", &result.composite, {"R", "G", "B", "A"}},
+                                         {"indirect", &result.indirect, {"R", "G", "B"}},
+                                         {"gi", &result.gi, {"R", "G", "B"}}};
+      if (!result.coverage.empty()) layers.push_back({"coverage", &result.coverage, {"Y"}});
+      detail::write_frame(out.path_for(g.frame), g, layers, write, input);
       write.warn_collisions = false;  // one warning per run is enough
     }
   };

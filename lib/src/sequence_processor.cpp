@@ -324,7 +324,8 @@ class Processor {
       if (s.read == n && s.finish) return frame;
       return std::nullopt;
     }
-    Lit lit{std::move(traced.grid), std::move(traced.light), nullptr, nullptr};
+    Lit lit{std::move(traced.grid), std::move(traced.light), std::move(traced.coverage), nullptr,
+            nullptr};
     if (still_to_write(s.read, s.output)) {
       // Kept until the frame is written: its input (headers, and with passthrough its pixels),
       // and its passes unless they can be converted again from those pixels. Motion only
@@ -347,6 +348,7 @@ class Processor {
                        : std::move(traced.light);
     // The next step reprojects from this frame: its trace grid is all it reads.
     ema_grid_ = std::move(traced.grid);
+    ema_coverage_ = std::move(traced.coverage);
     ema_index_ = index;
     ema_valid_ = true;
   }
@@ -355,7 +357,7 @@ class Processor {
   // step, if it was.
   void finish(int n, std::optional<InputFrame> own, Made* m, double* convert_ms) {
     if (const auto it = failed_.find(n); it != failed_.end()) rethrow(it->second);
-    Image indirect;
+    Image indirect, coverage;
     if (mode_ == TemporalMode::kWindow) {
       std::vector<const GBuffer*> frames;
       std::vector<const Image*> light;
@@ -385,6 +387,7 @@ class Processor {
         *convert_ms += ms_since(start);
       }
       indirect = pipeline_.finish_light(*lit.g, temporal_window(frames, light, center, radius_));
+      coverage = pipeline_.finish_coverage(*lit.g, lit.grid, lit.coverage);
       // From now on the frame is only a neighbour: reprojection reads its trace grid.
       m->g = std::move(lit.g);
       m->input = std::move(lit.input);
@@ -394,11 +397,16 @@ class Processor {
                     "frame " + std::to_string(n) + " was not read");
       m->input = std::move(own->input);
       auto g = std::make_shared<const GBuffer>(std::move(own->g));
-      indirect = mode_ == TemporalMode::kEma ? pipeline_.finish_light(*g, ema_out_)
-                                             : pipeline_.indirect_light(*g);
+      if (mode_ == TemporalMode::kEma) {
+        indirect = pipeline_.finish_light(*g, ema_out_);
+        coverage = pipeline_.finish_coverage(*g, ema_grid_, ema_coverage_);
+      } else {
+        indirect = pipeline_.indirect_light(*g, &coverage);
+      }
       m->g = std::move(g);
     }
-    m->result = std::make_shared<FrameResult>(pipeline_.composite(*m->g, std::move(indirect)));
+    m->result = std::make_shared<FrameResult>(
+        pipeline_.composite(*m->g, std::move(indirect), std::move(coverage)));
   }
 
   void write(Made m) {
@@ -451,6 +459,7 @@ class Processor {
   struct Lit {
     GBuffer grid;                      // its trace grid, what reprojection reads
     Image light;                       // its light on the grid, before temporal filtering
+    Image coverage;                    // its coverage on the grid (Pipeline::TracedLight)
     std::shared_ptr<const GBuffer> g;  // while it is still to be written (or converted again)
     std::shared_ptr<const DecodedInput> input;  // while it is still to be written
   };
@@ -471,8 +480,9 @@ class Processor {
   std::map<int, std::pair<double, double>> times_;  // per frame: read_ms, gi_ms so far
   int ema_index_ = 0;
   bool ema_valid_ = false;
-  GBuffer ema_grid_;  // the last frame stepped's trace grid
-  Image ema_out_;     // its filtered light on the grid
+  GBuffer ema_grid_;    // the last frame stepped's trace grid
+  Image ema_out_;       // its filtered light on the grid
+  Image ema_coverage_;  // its coverage on the grid (not filtered)
 
   std::atomic<bool> stopped_{false};
   CallerThread caller_;

@@ -31,8 +31,8 @@ struct SequenceJob {
   bool write_needs_passes = false;  // `write` reads the G-buffer's planes (the preview does)
   bool fail_fast = false;
   // Frames between reading and writing at once: 3 overlaps reading, computing and writing; 1
-  // runs them one after the other (the least memory).
-  int in_flight = 3;
+  // runs them one after the other (the least memory). PipelineMemory::frames_in_flight.
+  int in_flight = 2;
 };
 
 // Runs `job` as run_sequence documents it (reports in frame order, callbacks on the calling

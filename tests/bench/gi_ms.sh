@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The README's speed table: median gi_ms (from --stats) per preset, thread count and temporal
 # mode on a 1080p shot, the configurations interleaved round by round so that a noisy machine
-# weighs on all of them alike. Usage:
+# weighs on all of them alike. One frame in flight: the GI's own time, not shared with the
+# decoding and encoding of the frames around it (tests/bench/end_to_end.sh times the whole). Usage:
 #   tests/bench/gi_ms.sh [BUILD_DIR] [PATTERN] [FRAMES] [ROUNDS]
 # PATTERN defaults to /tmp/ssgi1080/room.####.exr (tests/bench/make_1080p.sh makes it).
 set -euo pipefail
@@ -27,7 +28,7 @@ for ((r = 0; r < rounds; ++r)); do
     IFS='|' read -r name opts simd <<< "${configs[$i]}"
     read -r -a args <<< "$opts"
     SSGI_SIMD=${simd:-} "$ssgi" run "$pattern" --frames "$frames" -o "$out/o.####.exr" -q \
-      --no-passthrough --stats "$out/stats.$i.$r.json" "${args[@]}"
+      --no-passthrough --frames-in-flight 1 --stats "$out/stats.$i.$r.json" "${args[@]}"
   done
 done
 printf '| configuration | gi_ms (median of %s frames x %s rounds) |\n|---|---|\n' "$frames" "$rounds"

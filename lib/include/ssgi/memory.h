@@ -58,11 +58,13 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& sequence, const Plan& pla
                                    const GiSettings& settings, const WriteOptions& write,
                                    int threads, const PipelineMemory& memory);
 
-// The pipeline's memory for a run under `limit`: as many frames in flight (up to 3) as the
-// estimate fits; the reference keeps at most 1 GiB of hits, and no more than what the limit
-// leaves beside the rest of the run (as little as none: then each bounce traces again).
+// The pipeline's memory for a run under `limit`: as many frames in flight (up to
+// `frames_in_flight`, 1 to 3) as the estimate fits; the reference keeps at most 1 GiB of hits,
+// and no more than what the limit leaves beside the rest of the run (as little as none: then
+// each bounce traces again).
 PipelineMemory pipeline_memory_within(const MemoryLimit& limit, const SequenceInfo& sequence,
                                       const Plan& plan, const GiSettings& settings,
-                                      const WriteOptions& write, int threads);
+                                      const WriteOptions& write, int threads,
+                                      int frames_in_flight = PipelineMemory().frames_in_flight);
 
 }  // namespace ssgi

@@ -47,7 +47,9 @@ struct PipelineMemory {
   std::size_t reference_hits_bytes = std::size_t{1} << 30;
   // Frames between reading and writing at once in run_sequence: 3 reads the next frame and
   // writes the last while lighting one; 2 overlaps two of those; 1 does one after the other.
-  int frames_in_flight = 3;
+  // 2 by default: as fast as 3 on a 1080p shot (2 cores), 90 MB less without passthrough and
+  // 430 MB less with it (tests/bench/end_to_end.sh; README, Speed and memory).
+  int frames_in_flight = 2;
 };
 
 class Pipeline {
@@ -71,7 +73,7 @@ class Pipeline {
   struct TracedLight {
     GBuffer grid;
     Image light;     // 3 channels, the grid's size
-    Image coverage;  // 1 channel, the grid's size: FrameResult::coverage there, denoised
+    Image coverage;  // 1 channel, the grid's size: FrameResult::coverage there (-1: no surface)
   };
   TracedLight trace_light(const GBuffer& frame) const;
 
@@ -79,9 +81,10 @@ class Pipeline {
   // the denoiser's bilateral upsampling.
   Image finish_light(const GBuffer& frame, const Image& grid_light) const;
 
-  // TracedLight::coverage carried to the frame's resolution as finish_light carries the light
-  // (1 channel).
-  Image finish_coverage(const GBuffer& frame, const Image& grid_coverage) const;
+  // TracedLight::coverage at the frame's resolution (1 channel): smoothed over neighbouring
+  // trace samples on one surface and interpolated between them; `grid` is TracedLight::grid.
+  Image finish_coverage(const GBuffer& frame, const GBuffer& grid,
+                        const Image& grid_coverage) const;
 
   // trace_light then finish_light: the frame's indirect light (3 channels) without temporal
   // filtering; with `coverage`, its coverage at the frame's resolution too.

@@ -32,6 +32,9 @@ struct RunOptions {
   // --max-memory, else the scheduler's (scheduler_memory_limit): a run whose estimated peak
   // (estimate_run_memory) is over it is refused before anything is computed or written.
   MemoryLimit memory_limit;
+  // --frames-in-flight: frames read, lit and written at once (1 to 3; 0: PipelineMemory's
+  // default), fewer when the memory limit needs it.
+  int frames_in_flight = 0;
 };
 
 // What became of one frame.

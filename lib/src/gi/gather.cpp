@@ -172,7 +172,7 @@ template <typename Radiance>
 Image gather_once(const TraceGrid& grid, const HitSource& hits, const Radiance& radiance,
                   const CubeLight& cube, Image* coverage = nullptr) {
   Image out(grid.width, grid.height, 3);
-  if (coverage) *coverage = Image(grid.width, grid.height, 1);
+  if (coverage) *coverage = Image(grid.width, grid.height, 1, -1.0f);
   parallel_for_rows(grid.height, [&](int by) {
     HitScratch scratch;
     const HitRow row = hits.row(by, &scratch);
@@ -219,6 +219,76 @@ Image gather_once(const TraceGrid& grid, const HitSource& hits, const Radiance& 
 Image gather_bounces(const TraceGrid& grid, const WeightedHits& hits, int bounces,
                      const MissModel& misses, Image* coverage) {
   return gather_bounces(grid, HeldHits(grid, hits), bounces, misses, coverage);
+}
+
+Image coverage_to_frame(const Image& grid_coverage, const Image& grid_depth,
+                        const Image& grid_normal, int scale, float thickness, const Image& depth,
+                        const Image& normal) {
+  const int gw = grid_coverage.width(), gh = grid_coverage.height();
+  const int w = depth.width(), h = depth.height();
+  const float* in = grid_coverage.plane(0);
+  const float* gz = grid_depth.plane(0);
+  auto near = [&](float a, float b) { return std::fabs(a - b) <= thickness * std::min(a, b); };
+  auto facing = [&](std::size_t a, const float n[3]) {
+    return grid_normal.plane(0)[a] * n[0] + grid_normal.plane(1)[a] * n[1] +
+               grid_normal.plane(2)[a] * n[2] >
+           0.9f;
+  };
+  auto same_surface = [&](std::size_t a, std::size_t b) {
+    const float n[3] = {grid_normal.plane(0)[b], grid_normal.plane(1)[b], grid_normal.plane(2)[b]};
+    return facing(a, n) && near(gz[a], gz[b]);
+  };
+  Image smooth(gw, gh, 1, -1.0f);
+  parallel_for_rows(gh, [&](int y) {
+    for (int x = 0; x < gw; ++x) {
+      const std::size_t s = static_cast<std::size_t>(y) * gw + x;
+      if (!(in[s] >= 0)) continue;
+      float sum = 0;
+      int n = 0;
+      for (int qy = std::max(0, y - 1); qy <= std::min(gh - 1, y + 1); ++qy)
+        for (int qx = std::max(0, x - 1); qx <= std::min(gw - 1, x + 1); ++qx) {
+          const std::size_t q = static_cast<std::size_t>(qy) * gw + qx;
+          if (in[q] >= 0 && same_surface(s, q)) sum += in[q], ++n;
+        }
+      smooth.plane(0)[s] = sum / static_cast<float>(n);  // n >= 1: the sample itself
+    }
+  });
+  Image out(w, h, 1);
+  const float* c = smooth.plane(0);
+  const float inv_scale = 1.0f / static_cast<float>(scale);
+  parallel_for_rows(h, [&](int y) {
+    // Sample centres sit at pixel (s + 1/2) scale: the pixel's place between them.
+    const float v = (static_cast<float>(y) + 0.5f) * inv_scale - 0.5f;
+    const int y0 = std::clamp(static_cast<int>(std::floor(v)), 0, gh - 1);
+    const int y1 = std::min(y0 + 1, gh - 1);
+    const float fy = std::clamp(v - static_cast<float>(y0), 0.0f, 1.0f);
+    const std::size_t own_row = static_cast<std::size_t>(std::min(y / scale, gh - 1)) * gw;
+    for (int x = 0; x < w; ++x) {
+      const std::size_t p = static_cast<std::size_t>(y) * w + x;
+      const float z = depth.plane(0)[p];
+      const float n[3] = {normal.plane(0)[p], normal.plane(1)[p], normal.plane(2)[p]};
+      float& o = out.plane(0)[p];
+      o = 0.0f;
+      if (!std::isfinite(z)) continue;
+      const float u = (static_cast<float>(x) + 0.5f) * inv_scale - 0.5f;
+      const int x0 = std::clamp(static_cast<int>(std::floor(u)), 0, gw - 1);
+      const int x1 = std::min(x0 + 1, gw - 1);
+      const float fx = std::clamp(u - static_cast<float>(x0), 0.0f, 1.0f);
+      const int xs[2] = {x0, x1}, ys[2] = {y0, y1};
+      const float wx[2] = {1.0f - fx, fx}, wy[2] = {1.0f - fy, fy};
+      float sum = 0, weight = 0;
+      for (int j = 0; j < 2; ++j)
+        for (int i = 0; i < 2; ++i) {
+          const std::size_t q = static_cast<std::size_t>(ys[j]) * gw + xs[i];
+          if (!(c[q] >= 0) || !near(gz[q], z) || !facing(q, n)) continue;
+          sum += wx[i] * wy[j] * c[q];
+          weight += wx[i] * wy[j];
+        }
+      const float own = c[own_row + std::min(x / scale, gw - 1)];
+      o = weight > 0 ? sum / weight : std::max(own, 0.0f);
+    }
+  });
+  return out;
 }
 
 Image gather_bounces(const TraceGrid& grid, const HitSource& hits, int bounces,

@@ -91,10 +91,20 @@ class HitSource {
 // sample (1 channel) the share of the last gather's light that its hits brought rather than the
 // miss model (the mean of the three channels; where nothing brought light, the share of the
 // hemisphere that met a traced surface): 1 where the result is traced, 0 where it is the miss
-// model's estimate.
+// model's estimate, -1 where the grid has no origin.
 Image gather_bounces(const TraceGrid& grid, const HitSource& hits, int bounces,
                      const MissModel& misses, Image* coverage = nullptr);
 Image gather_bounces(const TraceGrid& grid, const WeightedHits& hits, int bounces,
                      const MissModel& misses, Image* coverage = nullptr);
+
+// gather_bounces' coverage (trace samples at `scale` pixels each, -1 without a surface) at the
+// resolution of `depth` and `normal` (the frame's): averaged over each sample's 3 x 3 neighbours on
+// its surface (the per-sample share is noisy), then interpolated bilinearly between the samples on
+// each pixel's surface (the nearest when none is). Samples are on one surface when their
+// normals agree and their depths are within `thickness` x depth (surface_model.h's slab);
+// grid_depth and grid_normal are the trace grid's.
+Image coverage_to_frame(const Image& grid_coverage, const Image& grid_depth,
+                        const Image& grid_normal, int scale, float thickness, const Image& depth,
+                        const Image& normal);
 
 }  // namespace ssgi::detail
