@@ -289,8 +289,7 @@ Pipeline::TracedLight Pipeline::trace_light(const GBuffer& g) const {
 Image Pipeline::finish_coverage(const GBuffer& g, const GBuffer& grid,
                                 const Image& grid_coverage) const {
   return detail::coverage_to_frame(grid_coverage, grid.depth, grid.normal, impl_->plan.trace_scale,
-                                   static_cast<float>(impl_->settings.thickness), g.depth,
-                                   g.normal);
+                                   static_cast<float>(impl_->settings.thickness), g.depth);
 }
 
 Image Pipeline::finish_light(const GBuffer& g, const Image& grid_light) const {

@@ -188,22 +188,26 @@ Image gather_once(const TraceGrid& grid, const HitSource& hits, const Radiance& 
         for (int c = 0; c < 3; ++c) sum[c] += share * cube[f][c];
       }
       const std::array<float, 3> missed = sum;
+      // The hits' light apart too, for the coverage (not sum - missed, which rounding could
+      // take below 0 or above the total).
+      float from_hits = 0;
       const std::uint32_t first = row.begin[bx], end = row.begin[bx + 1];
-      for (std::uint32_t e = first; e < end; ++e) {
-        const std::array<float, 3> l = radiance(row.pixel[e]);
-        const float weight = row.weight ? row.weight[e] : row.uniform_weight;
-        for (int c = 0; c < 3; ++c) sum[c] += weight * l[c];
-      }
-      for (int c = 0; c < 3; ++c) out.plane(c)[s] = sum[c];
       if (coverage) {
-        // The hits' light over all of it, from sums that stay apart (the hits' part is not
-        // sum - missed, which rounding could take below 0 or above the total).
-        float from_hits = 0;
         for (std::uint32_t e = first; e < end; ++e) {
           const std::array<float, 3> l = radiance(row.pixel[e]);
           const float weight = row.weight ? row.weight[e] : row.uniform_weight;
+          for (int c = 0; c < 3; ++c) sum[c] += weight * l[c];
           from_hits += weight * (l[0] + l[1] + l[2]);
         }
+      } else {
+        for (std::uint32_t e = first; e < end; ++e) {
+          const std::array<float, 3> l = radiance(row.pixel[e]);
+          const float weight = row.weight ? row.weight[e] : row.uniform_weight;
+          for (int c = 0; c < 3; ++c) sum[c] += weight * l[c];
+        }
+      }
+      for (int c = 0; c < 3; ++c) out.plane(c)[s] = sum[c];
+      if (coverage) {
         const float total = from_hits + (missed[0] + missed[1] + missed[2]);
         coverage->plane(0)[s] = total > 0 && std::isfinite(total)
                                     ? std::clamp(from_hits / total, 0.0f, 1.0f)
@@ -222,22 +226,16 @@ Image gather_bounces(const TraceGrid& grid, const WeightedHits& hits, int bounce
 }
 
 Image coverage_to_frame(const Image& grid_coverage, const Image& grid_depth,
-                        const Image& grid_normal, int scale, float thickness, const Image& depth,
-                        const Image& normal) {
+                        const Image& grid_normal, int scale, float thickness, const Image& depth) {
   const int gw = grid_coverage.width(), gh = grid_coverage.height();
   const int w = depth.width(), h = depth.height();
   const float* in = grid_coverage.plane(0);
   const float* gz = grid_depth.plane(0);
+  const float *gnx = grid_normal.plane(0), *gny = grid_normal.plane(1), *gnz = grid_normal.plane(2);
   auto near = [&](float a, float b) { return std::fabs(a - b) <= thickness * std::min(a, b); };
-  auto facing = [&](std::size_t a, const float n[3]) {
-    return grid_normal.plane(0)[a] * n[0] + grid_normal.plane(1)[a] * n[1] +
-               grid_normal.plane(2)[a] * n[2] >
-           0.9f;
-  };
-  auto same_surface = [&](std::size_t a, std::size_t b) {
-    const float n[3] = {grid_normal.plane(0)[b], grid_normal.plane(1)[b], grid_normal.plane(2)[b]};
-    return facing(a, n) && near(gz[a], gz[b]);
-  };
+  // Per sample with a surface, which of its 3 x 3 neighbours (bit 3 (dy + 1) + dx + 1) have one
+  // on its surface: their normals agree and their depths are within the slab.
+  std::vector<std::uint16_t> same(grid_coverage.plane_size(), 0);
   Image smooth(gw, gh, 1, -1.0f);
   parallel_for_rows(gh, [&](int y) {
     for (int x = 0; x < gw; ++x) {
@@ -245,47 +243,61 @@ Image coverage_to_frame(const Image& grid_coverage, const Image& grid_depth,
       if (!(in[s] >= 0)) continue;
       float sum = 0;
       int n = 0;
+      std::uint16_t bits = 0;
       for (int qy = std::max(0, y - 1); qy <= std::min(gh - 1, y + 1); ++qy)
         for (int qx = std::max(0, x - 1); qx <= std::min(gw - 1, x + 1); ++qx) {
           const std::size_t q = static_cast<std::size_t>(qy) * gw + qx;
-          if (in[q] >= 0 && same_surface(s, q)) sum += in[q], ++n;
+          const float facing = gnx[s] * gnx[q] + gny[s] * gny[q] + gnz[s] * gnz[q];
+          if (!(in[q] >= 0) || !(facing > 0.9f) || !near(gz[s], gz[q])) continue;
+          sum += in[q], ++n;
+          bits |= static_cast<std::uint16_t>(1u << (3 * (qy - y + 1) + qx - x + 1));
         }
       smooth.plane(0)[s] = sum / static_cast<float>(n);  // n >= 1: the sample itself
+      same[s] = bits;
     }
   });
   Image out(w, h, 1);
   const float* c = smooth.plane(0);
-  const float inv_scale = 1.0f / static_cast<float>(scale);
+  // Sample centres sit at pixel (s + 1/2) scale: a pixel's place between them, per column and
+  // per row (the same for every row and column), and the sample of its own block, which is one
+  // of the two.
+  struct Between {
+    int first, second, own;
+    float second_weight;
+  };
+  auto between = [&](int i, int samples) {
+    const float t = (static_cast<float>(i) + 0.5f) / static_cast<float>(scale) - 0.5f;
+    const int first = std::clamp(static_cast<int>(std::floor(t)), 0, samples - 1);
+    return Between{first, std::min(first + 1, samples - 1), std::min(i / scale, samples - 1),
+                   std::clamp(t - static_cast<float>(first), 0.0f, 1.0f)};
+  };
+  std::vector<Between> columns(w);
+  for (int x = 0; x < w; ++x) columns[x] = between(x, gw);
   parallel_for_rows(h, [&](int y) {
-    // Sample centres sit at pixel (s + 1/2) scale: the pixel's place between them.
-    const float v = (static_cast<float>(y) + 0.5f) * inv_scale - 0.5f;
-    const int y0 = std::clamp(static_cast<int>(std::floor(v)), 0, gh - 1);
-    const int y1 = std::min(y0 + 1, gh - 1);
-    const float fy = std::clamp(v - static_cast<float>(y0), 0.0f, 1.0f);
-    const std::size_t own_row = static_cast<std::size_t>(std::min(y / scale, gh - 1)) * gw;
+    const Between row = between(y, gh);
+    const int ys[2] = {row.first, row.second};
+    const float wy[2] = {1.0f - row.second_weight, row.second_weight};
     for (int x = 0; x < w; ++x) {
       const std::size_t p = static_cast<std::size_t>(y) * w + x;
       const float z = depth.plane(0)[p];
-      const float n[3] = {normal.plane(0)[p], normal.plane(1)[p], normal.plane(2)[p]};
       float& o = out.plane(0)[p];
       o = 0.0f;
       if (!std::isfinite(z)) continue;
-      const float u = (static_cast<float>(x) + 0.5f) * inv_scale - 0.5f;
-      const int x0 = std::clamp(static_cast<int>(std::floor(u)), 0, gw - 1);
-      const int x1 = std::min(x0 + 1, gw - 1);
-      const float fx = std::clamp(u - static_cast<float>(x0), 0.0f, 1.0f);
-      const int xs[2] = {x0, x1}, ys[2] = {y0, y1};
-      const float wx[2] = {1.0f - fx, fx}, wy[2] = {1.0f - fy, fy};
+      // The samples around the pixel on its own block's surface (and near its depth).
+      const Between& col = columns[x];
+      const std::size_t own = static_cast<std::size_t>(row.own) * gw + col.own;
+      const int xs[2] = {col.first, col.second};
+      const float wx[2] = {1.0f - col.second_weight, col.second_weight};
       float sum = 0, weight = 0;
       for (int j = 0; j < 2; ++j)
         for (int i = 0; i < 2; ++i) {
           const std::size_t q = static_cast<std::size_t>(ys[j]) * gw + xs[i];
-          if (!(c[q] >= 0) || !near(gz[q], z) || !facing(q, n)) continue;
+          const int bit = 3 * (ys[j] - row.own + 1) + xs[i] - col.own + 1;
+          if (!(same[own] >> bit & 1u) || !near(gz[q], z)) continue;
           sum += wx[i] * wy[j] * c[q];
           weight += wx[i] * wy[j];
         }
-      const float own = c[own_row + std::min(x / scale, gw - 1)];
-      o = weight > 0 ? sum / weight : std::max(own, 0.0f);
+      o = weight > 0 ? sum / weight : std::max(c[own], 0.0f);
     }
   });
   return out;

@@ -98,13 +98,13 @@ Image gather_bounces(const TraceGrid& grid, const WeightedHits& hits, int bounce
                      const MissModel& misses, Image* coverage = nullptr);
 
 // gather_bounces' coverage (trace samples at `scale` pixels each, -1 without a surface) at the
-// resolution of `depth` and `normal` (the frame's): averaged over each sample's 3 x 3 neighbours on
-// its surface (the per-sample share is noisy), then interpolated bilinearly between the samples on
-// each pixel's surface (the nearest when none is). Samples are on one surface when their
-// normals agree and their depths are within `thickness` x depth (surface_model.h's slab);
-// grid_depth and grid_normal are the trace grid's.
+// resolution of `depth` (the frame's): averaged over each sample's 3 x 3 neighbours on its
+// surface (the per-sample share is noisy), then interpolated bilinearly between the samples
+// around each pixel that are on its own block's surface and near its depth (its block's value
+// when none is). Samples are on one surface when their normals agree and their depths are
+// within `thickness` x depth (surface_model.h's slab); grid_depth and grid_normal are the trace
+// grid's.
 Image coverage_to_frame(const Image& grid_coverage, const Image& grid_depth,
-                        const Image& grid_normal, int scale, float thickness, const Image& depth,
-                        const Image& normal);
+                        const Image& grid_normal, int scale, float thickness, const Image& depth);
 
 }  // namespace ssgi::detail
