@@ -185,7 +185,7 @@ std::array<std::array<float, 3>, kCubeFaces> MissModel::cube_light(
     border[grid.width + by] = border_weight(display_w_ / 2, offset_y_ + (by + 0.5) * grid.scale);
   std::vector<Sums> rows(grid.height);
   parallel_for_rows(grid.height, [&](int by) {
-    Sums& r = rows[by];
+    Sums r;  // a local, kept in registers: the sums are a dependency chain through every sample
     for (int bx = 0; bx < grid.width; ++bx) {
       const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
       if (grid.origin[s] < 0) continue;
@@ -204,6 +204,7 @@ std::array<std::array<float, 3>, kCubeFaces> MissModel::cube_light(
       r.weight_all += b;
       ++r.n;
     }
+    rows[by] = r;
   });
   double sum[kCubeFaces][3] = {}, weight[kCubeFaces] = {}, total[3] = {}, weight_all = 0;
   std::size_t n = 0;
