@@ -19,11 +19,13 @@ int main(int argc, char** argv) {
   ssgi::apply_preset("draft", &options.gi);
   ssgi::RunCallbacks callbacks;
   callbacks.on_frame = [](const ssgi::FrameReport& f, int done, int total) {
-    std::printf("%d/%d: %s %s\n", done, total, f.output.c_str(), f.ok ? "written" : f.error.c_str());
+    std::printf("%d/%d: %s %s\n", done, total, f.output.c_str(),
+                f.ok ? "written" : f.error.c_str());
   };
   try {
     const ssgi::RunReport report = ssgi::run_sequence(options, callbacks);
-    std::printf("ssgi %s: %d of %d frames failed\n", ssgi::version(), report.failed(), report.total);
+    std::printf("ssgi %s: %d of %d frames failed\n", ssgi::version(), report.failed(),
+                report.total);
     return report.failed() == 0 ? 0 : 1;
   } catch (const ssgi::Error& e) {  // the whole run: bad options, no frames, over --max-memory
     std::fprintf(stderr, "%s: %s\n", e.file().c_str(), e.what());

@@ -240,19 +240,8 @@ int MarchSide(const MeshView& mesh, const SliceFrame& f, const SideMarch& m, Sid
 
 int CollectHits(const SideSamples& samples, int count, float sector_weight, std::uint32_t* mask,
                 std::int32_t* pixel, float* weight) {
-  std::uint32_t m = *mask;
-  int kept = 0;
-  // Every step is written, and kept (the index moves on) when it brought sectors of its own: no
-  // branch on data.
-  for (int j = 0; j < count; ++j) {
-    const std::uint32_t fresh = samples.bits[j] & ~m;
-    m |= fresh;
-    pixel[kept] = samples.pixel[j + 1];
-    weight[kept] = sector_weight * static_cast<float>(hwy::PopCount(fresh));
-    kept += fresh != 0;
-  }
-  *mask = m;
-  return kept;
+  return collect_hits_with(samples, count, sector_weight, mask, pixel, weight,
+                           [](std::uint32_t v) { return hwy::PopCount(v); });
 }
 
 }  // namespace HWY_NAMESPACE
@@ -362,17 +351,7 @@ int march_side_scalar(const MeshView& mesh, const SliceFrame& f, const SideMarch
 
 int collect_hits_scalar(const SideSamples& samples, int count, float sector_weight,
                         std::uint32_t* mask, std::int32_t* pixel, float* weight) {
-  std::uint32_t m = *mask;
-  int kept = 0;
-  for (int j = 0; j < count; ++j) {
-    const std::uint32_t fresh = samples.bits[j] & ~m;
-    m |= fresh;
-    pixel[kept] = samples.pixel[j + 1];
-    weight[kept] = sector_weight * static_cast<float>(sector_count(fresh));
-    kept += fresh != 0;
-  }
-  *mask = m;
-  return kept;
+  return collect_hits_with(samples, count, sector_weight, mask, pixel, weight, sector_count);
 }
 
 int collect_hits(const SideSamples& samples, int count, float sector_weight, std::uint32_t* mask,

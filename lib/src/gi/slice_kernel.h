@@ -137,6 +137,26 @@ inline int sector_count(std::uint32_t v) {
   return static_cast<int>((((v + (v >> 4)) & 0x0f0f0f0fu) * 0x01010101u) >> 24);
 }
 
+// collect_hits with the population count `count_sectors` (inlined into each target's version).
+template <typename CountSectors>
+inline int collect_hits_with(const SideSamples& samples, int count, float sector_weight,
+                             std::uint32_t* mask, std::int32_t* pixel, float* weight,
+                             const CountSectors& count_sectors) {
+  std::uint32_t m = *mask;
+  int kept = 0;
+  // Every step is written, and kept (the index moves on) when it brought sectors of its own: no
+  // branch on data.
+  for (int j = 0; j < count; ++j) {
+    const std::uint32_t fresh = samples.bits[j] & ~m;
+    m |= fresh;
+    pixel[kept] = samples.pixel[j + 1];
+    weight[kept] = sector_weight * static_cast<float>(count_sectors(fresh));
+    kept += fresh != 0;
+  }
+  *mask = m;
+  return kept;
+}
+
 // The sectors ceil(lo) .. floor(hi) of [lo, hi] as bits (0 when empty or not a number).
 inline std::uint32_t sector_bits(float lo, float hi) {
   if (!(hi > lo)) return 0;
