@@ -6,8 +6,8 @@
 # / mean of the truth, all channels, averaged over frames; truth_error) for no GI, for the
 # oracle ambient (the truth's own mean DiffInd per channel and frame as a constant) and for
 # ssgi with the given options (its default settings when none), ssgi's level (the mean of its
-# indirect over the truth's: below 1 too dark overall, above 1 too bright), with ssgi's wall time per
-# frame, and a last row of the means over all scenes. Not run by ctest: too slow, and needs
+# indirect over the truth's: below 1 too dark overall, above 1 too bright), with ssgi's wall
+# time per frame, and a last row of the means over all scenes. Not run by ctest: too slow, and needs
 # blender.
 # Usage: tests/accuracy/training.sh [BUILD_DIR] [-- extra ssgi options]
 # Environment: SSGI_TRAINING_SCENES (training scenes to measure, space-separated, " " for

@@ -51,8 +51,9 @@ for ((r = 0; r < rounds; ++r)); do
   measure passthrough "$ssgi" run "$prefix.####.exr" --frames "$frames" -o "$out/pass.####.exr" \
     -q
 done
-printf '| %s, %s frames x %s rounds | s/frame (median) | x floor | peak RSS MB |\n|---|---|---|---|\n' \
+printf '| %s, %s frames x %s rounds | s/frame (median) | x floor | peak RSS MB |\n' \
   "$prefix" "$count" "$rounds"
+printf '|---|---|---|---|\n'
 python3 - "$out" "$count" <<'EOF'
 import statistics, sys
 out, count = sys.argv[1], int(sys.argv[2])

@@ -2,7 +2,8 @@
 # The README's speed table: median gi_ms (from --stats) per preset, thread count and temporal
 # mode on a 1080p shot, the configurations interleaved round by round so that a noisy machine
 # weighs on all of them alike. One frame in flight: the GI's own time, not shared with the
-# decoding and encoding of the frames around it (tests/bench/end_to_end.sh times the whole). Usage:
+# decoding and encoding of the frames around it (tests/bench/end_to_end.sh times the whole).
+# Usage:
 #   tests/bench/gi_ms.sh [BUILD_DIR] [PATTERN] [FRAMES] [ROUNDS]
 # PATTERN defaults to /tmp/ssgi1080/room.####.exr (tests/bench/make_1080p.sh makes it).
 set -euo pipefail
@@ -31,7 +32,8 @@ for ((r = 0; r < rounds; ++r)); do
       --no-passthrough --frames-in-flight 1 --stats "$out/stats.$i.$r.json" "${args[@]}"
   done
 done
-printf '| configuration | gi_ms (median of %s frames x %s rounds) |\n|---|---|\n' "$frames" "$rounds"
+printf '| configuration | gi_ms (median of %s frames x %s rounds) |\n' "$frames" "$rounds"
+printf '|---|---|\n'
 for i in "${!configs[@]}"; do
   name=${configs[$i]%%|*}
   python3 - "$name" "$out"/stats."$i".*.json <<'EOF'
