@@ -56,8 +56,12 @@ struct RangeWeightV {
     poly = hn::Add(c2, hn::Mul(f, poly));
     poly = hn::Add(c1, hn::Mul(f, poly));
     poly = hn::Add(one, hn::Mul(f, poly));
+    // Lanes past the cut-off (or NaN) are zeroed below; their exponent is not converted, since
+    // converting NaN or a huge value to an integer is undefined (Highway's emulated targets
+    // use a C++ cast).
     const V scale =
-        hn::BitCast(d, hn::ShiftLeft<23>(hn::Add(hn::ConvertTo(di, whole), hn::Set(di, 127))));
+        hn::BitCast(d, hn::ShiftLeft<23>(hn::Add(
+                           hn::ConvertTo(di, hn::IfThenElseZero(valid, whole)), hn::Set(di, 127))));
     V w = hn::Mul(poly, scale);
     // The normal term.
     const V cos_angle = hn::Add(hn::Add(hn::Mul(pnx, qnx), hn::Mul(pny, qny)), hn::Mul(pnz, qnz));
