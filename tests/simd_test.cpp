@@ -83,6 +83,22 @@ struct RandomGuides {
   }
 };
 
+// Random light in [0, 4) for upsampling to a fine row of width w from `coarse`: the coarse
+// level's 3 planes and the fine row's own values.
+struct UpsampleLight {
+  std::vector<float> light, own;
+  const float* coarse[3];
+  const float* own_at[3];
+  UpsampleLight(std::mt19937& rng, const RandomGuides& coarse_guides, int w)
+      : light(3 * coarse_guides.z.size()), own(3 * static_cast<std::size_t>(w)) {
+    std::uniform_real_distribution<float> u(0.0f, 4.0f);
+    for (float& v : light) v = u(rng);
+    for (float& v : own) v = u(rng);
+    const std::size_t cn = coarse_guides.z.size();
+    for (int c = 0; c < 3; ++c) coarse[c] = light.data() + c * cn, own_at[c] = own.data() + c * w;
+  }
+};
+
 TEST_P(SimdTarget, UpsampleRowMatchesTheScalarTwinBitForBit) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<float> u(0.0f, 4.0f);
@@ -90,12 +106,9 @@ TEST_P(SimdTarget, UpsampleRowMatchesTheScalarTwinBitForBit) {
   for (auto [w, h] : {std::pair{1, 1}, std::pair{2, 3}, std::pair{7, 5}, std::pair{17, 9},
                       std::pair{40, 6}, std::pair{33, 1}}) {
     const RandomGuides fine(rng, w, h), coarse(rng, (w + 1) / 2, (h + 1) / 2);
-    std::vector<float> light(3 * coarse.z.size()), own(3 * static_cast<std::size_t>(w));
-    for (float& v : light) v = u(rng);
-    for (float& v : own) v = u(rng);
-    const std::size_t cn = coarse.z.size();
-    const float* const coarse_light[3] = {light.data(), light.data() + cn, light.data() + 2 * cn};
-    const float* const own_at[3] = {own.data(), own.data() + w, own.data() + 2 * w};
+    const UpsampleLight random_light(rng, coarse, w);
+    const float* const* coarse_light = random_light.coarse;
+    const float* const* own_at = random_light.own_at;
     for (float power : {32.0f, 1.0f, 0.0f}) {
       DenoiseSettings settings;
       settings.normal_power = power;
@@ -152,12 +165,9 @@ TEST_P(SimdTarget, KernelsReadAWindowOfRowsAsTheWholePlanes) {
   std::size_t lit = 0;
   for (auto [w, h] : {std::pair{1, 1}, std::pair{7, 5}, std::pair{40, 6}, std::pair{33, 3}}) {
     const RandomGuides fine(rng, w, h), coarse(rng, (w + 1) / 2, (h + 1) / 2);
-    std::vector<float> light(3 * coarse.z.size()), own(3 * static_cast<std::size_t>(w));
-    for (float& v : light) v = u(rng);
-    for (float& v : own) v = u(rng);
-    const std::size_t cn = coarse.z.size();
-    const float* const coarse_light[3] = {light.data(), light.data() + cn, light.data() + 2 * cn};
-    const float* const own_at[3] = {own.data(), own.data() + w, own.data() + 2 * w};
+    const UpsampleLight random_light(rng, coarse, w);
+    const float* const* coarse_light = random_light.coarse;
+    const float* const* own_at = random_light.own_at;
     for (int y = 0; y < h; ++y) {
       // Upsampling to row y, from a window of that row alone.
       std::vector<float> whole(3 * w), windowed(3 * w);
