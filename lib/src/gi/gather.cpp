@@ -192,6 +192,8 @@ Image gather_once(const TraceGrid& grid, const HitSource& hits, const Radiance& 
       // take below 0 or above the total).
       float from_hits = 0;
       const std::uint32_t first = row.begin[bx], end = row.begin[bx + 1];
+      // Two loops rather than one with the coverage's sum under a flag: that version (a
+      // template flag and if constexpr) measured 25 -> 50 ms for a 1080p frame's 8 bounces.
       if (coverage) {
         for (std::uint32_t e = first; e < end; ++e) {
           const std::array<float, 3> l = radiance(row.pixel[e]);
