@@ -158,6 +158,9 @@ const std::vector<OptionSpec> kTable = {
     {kTemporal, "temporal", 0, "MODE", OptionGroup::kGi, kPlanning,
      "window[:K] (frames +-K), ema[:ALPHA] or none",
      [](const RunOptions& d) { return temporal_text(d.gi); }},
+    {kMultiframe, "multiframe", 0, "MODE", OptionGroup::kGi, kPlanning,
+     "on[:K] continues missed rays in the temporal window's frames (K each side at most), or off",
+     [](const RunOptions& d) { return ssgi::multiframe_text(d.gi.multiframe); }},
     {kSeed, "seed", 0, "N", OptionGroup::kGi, kPlanning, "noise seed",
      [](const RunOptions& d) { return std::to_string(d.gi.seed); }},
     // colour

@@ -56,6 +56,7 @@ enum OptionId : int {
   kDenoiseNormalPower,
   kDenoiseBlur,
   kTemporal,
+  kMultiframe,
   kSpp,
   kJson,
   kStats,

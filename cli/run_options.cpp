@@ -69,6 +69,20 @@ void parse_temporal(const char* text, ssgi::GiSettings* gi) {
   }
 }
 
+// --multiframe off | on[:K]
+void parse_multiframe(const char* text, ssgi::GiSettings* gi) {
+  const std::string spec = text;
+  if (spec == "off") {
+    gi->multiframe = 0;
+  } else if (spec == "on") {
+    gi->multiframe = ssgi::kMultiframeWindow;
+  } else if (spec.rfind("on:", 0) == 0) {
+    gi->multiframe = static_cast<int>(parse_long("multiframe", spec.c_str() + 3, 1, 64));
+  } else {
+    ssgi::throw_usage("--multiframe must be off, on or on:K");
+  }
+}
+
 // "--name" of an option id, for messages.
 std::string written_name(int id) {
   for (const OptionSpec& spec : option_table())
@@ -241,6 +255,9 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
         break;
       case kTemporal:
         parse_temporal(a, &gi);
+        break;
+      case kMultiframe:
+        parse_multiframe(a, &gi);
         break;
       case kSpp:
         gi.rays = static_cast<int>(parse_long("spp", a, 1, 4096));

@@ -14,6 +14,7 @@
 #include <tuple>
 #include <vector>
 
+#include "directions.h"
 #include "fixture_frame.h"
 #include "gtest/gtest.h"
 #include "misses.h"
@@ -458,6 +459,105 @@ TEST(Pipeline, CoverageIsTheShareOfTheLightTheTracedRaysBrought) {
       EXPECT_NEAR(upper / n, 0.0, 0.03);
     }
   }
+}
+
+// Multiframe (lib/src/gi/multiframe.h): a lit face that only a neighbouring frame shows. Frame 2
+// sees the groove head-on, its lit upper face from the crease to the frame's top; frame 1 is
+// the same groove with the camera pitched 6 degrees down (half its vertical field of view is
+// 3.75), so that it shows the dark lower face alone: the rays its pixels send to the lit face
+// leave its frame, and with black misses it gets no light at all. Continued in frame 2's depth
+// buffer they find the lit face where frame 2 shows it: frame 1's light is the share of each
+// pixel's cosine-weighted hemisphere whose rays meet the lit face at a point inside frame 2's
+// view, integrated here by brute force over directions.
+TEST(Pipeline, MultiframeFindsALitFaceOnlyANeighbourShows) {
+  GiSettings s = groove_settings(Tracer::kSlices);
+  s.temporal = TemporalMode::kWindow;
+  s.multiframe = kMultiframeWindow;
+  Groove groove = make_groove(s);
+  GBuffer& b = groove.f.g;  // camera space is world space
+  b.frame = 2;
+  b.camera.has_world_transform = true;
+  GBuffer a = b;
+  a.frame = 1;
+  const double pitch = 6.0 * M_PI / 180.0;
+  // Camera 1's axes in world space; world_to_camera's columns (row-vector convention).
+  const Vec3d right{1, 0, 0}, up{0, std::cos(pitch), std::sin(pitch)},
+      forward{0, -std::sin(pitch), std::cos(pitch)};
+  const Vec3d axes[3] = {right, up, forward};
+  for (int j = 0; j < 3; ++j) {
+    a.camera.world_to_camera.m[0][j] = axes[j].x;
+    a.camera.world_to_camera.m[1][j] = axes[j].y;
+    a.camera.world_to_camera.m[2][j] = axes[j].z;
+  }
+  const Camera& cam = a.camera;
+  const int w = a.width(), h = a.height();
+  const double r = std::sqrt(0.5);
+  std::vector<Vec3d> point(static_cast<std::size_t>(w) * h);  // world space
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const double c[3] = {(x + 0.5 - cam.cx) / cam.fx, (cam.cy - (y + 0.5)) / cam.fy, 1.0};
+      const Vec3d d{c[0] * right.x + c[1] * up.x + c[2] * forward.x,
+                    c[0] * right.y + c[1] * up.y + c[2] * forward.y,
+                    c[0] * right.z + c[1] * up.z + c[2] * forward.z};
+      const double t = 10.0 / (d.z - d.y);  // the lower face: z - y = 10, y < 0
+      const Vec3d p{t * d.x, t * d.y, t * d.z};
+      ASSERT_LT(p.y, 0.0);
+      point[static_cast<std::size_t>(y) * w + x] = p;
+      a.depth.at(0, x, y) = static_cast<float>(t);  // camera 1's z of the point
+      const Vec3d n{0, r, -r};
+      for (int k = 0; k < 3; ++k)
+        a.normal.at(k, x, y) =
+            static_cast<float>(n.x * axes[k].x + n.y * axes[k].y + n.z * axes[k].z);
+      for (int k = 0; k < 3; ++k) a.direct.at(k, x, y) = 0.0f;
+    }
+  SequenceInfo seq = groove.f.seq;
+  seq.frames = seq.frames_on_disk = {1, 2};
+  const Pipeline pipeline(seq, s);
+  ASSERT_EQ(pipeline.plan().multiframe, s.temporal_radius);
+  const Pipeline::TracedLight ta = pipeline.trace_light(a), tb = pipeline.trace_light(b);
+  for (float v : ta.light.data()) ASSERT_EQ(v, 0.0f);  // alone it sees no light
+  Image light, coverage;
+  ASSERT_TRUE(pipeline.continue_light(a, {&ta, &tb}, 0, &light, &coverage));
+
+  // The expected share, over a grid of cosine-weighted directions.
+  const Camera& camera_b = b.camera;
+  auto expected = [&](const Vec3d& p) {
+    constexpr int kSide = 200;
+    int lit = 0;
+    for (int i = 0; i < kSide; ++i)
+      for (int j = 0; j < kSide; ++j) {
+        const detail::Vec3f d =
+            detail::cosine_hemisphere({0.0f, static_cast<float>(r), static_cast<float>(-r)},
+                                      (i + 0.5f) / kSide, (j + 0.5f) / kSide);
+        const double t = (10.0 - p.z - p.y) / (d.z + d.y);  // the upper face: z + y = 10
+        if (!(t > 0)) continue;
+        const Vec3d q{p.x + t * d.x, p.y + t * d.y, p.z + t * d.z};
+        double qx, qy;
+        camera_b.project(q, &qx, &qy);
+        if (q.y > 0 && q.z > 0 && qx >= 0 && qx <= w && qy >= 0 && qy <= h) ++lit;
+      }
+    return static_cast<double>(lit) / (kSide * kSide);
+  };
+  // The rows nearest the crease, where the lit face fills much of the hemisphere.
+  double sum_got = 0, sum_expected = 0;
+  for (int y = 0; y < 6; ++y)
+    for (int x = w / 4; x < 3 * w / 4; x += 4) {
+      const double e = expected(point[static_cast<std::size_t>(y) * w + x]);
+      ASSERT_GT(e, 0.05);
+      sum_expected += e;
+      sum_got += light.at(0, x, y);
+      EXPECT_NEAR(light.at(0, x, y), e, 0.25 * e) << x << "," << y;
+      EXPECT_GT(coverage.at(0, x, y), 0.99f);  // all its light was traced, in frame 2
+    }
+  std::printf("frame 1 with its rays continued in frame 2: %.4f, expected %.4f\n", sum_got,
+              sum_expected);
+  EXPECT_NEAR(sum_got / sum_expected, 1.0, 0.1);
+
+  // A neighbour with the frame's own camera adds nothing.
+  GBuffer still = b;
+  still.frame = 1;
+  const Pipeline::TracedLight ts = pipeline.trace_light(still);
+  EXPECT_FALSE(pipeline.continue_light(still, {&ts, &tb}, 0, &light, &coverage));
 }
 
 // Settings that take the tracers to their converged answer on a small analytic scene: every

@@ -12,6 +12,7 @@
 #include "gather.h"
 #include "march.h"
 #include "misses.h"
+#include "multiframe.h"
 #include "reference.h"
 #include "slices.h"
 #include "ssgi/error.h"
@@ -49,6 +50,8 @@ void validate(const GiSettings& s) {
   if (s.env_up != 'y' && s.env_up != 'z') throw_usage("--env-up must be y or z");
   if (s.temporal_radius < 1 || s.temporal_radius > 64)
     throw_usage("--temporal window:K needs K between 1 and 64");
+  if (s.multiframe < 0 || s.multiframe > 64)
+    throw_usage("--multiframe on:K needs K between 1 and 64");
   if (!(s.ema_alpha > 0 && s.ema_alpha <= 1))
     throw_usage("--temporal ema:ALPHA needs ALPHA in (0, 1]");
   detail::validate_denoise_settings(s.denoise_settings);
@@ -173,6 +176,22 @@ Plan make_plan(const SequenceInfo& seq, const GiSettings& s) {
           "no motion vectors: history through the cameras, moving objects "
           "rejected by the depth and normal tests");
   }
+  if (s.multiframe > 0) {
+    if (plan.temporal != TemporalMode::kWindow) {
+      plan.reasons.push_back(
+          "multiframe: off (it continues rays in the temporal window's frames: "
+          "needs --temporal window)");
+    } else if (s.tracer != Tracer::kSlices) {
+      plan.reasons.push_back("multiframe: off (the slice tracer's misses only)");
+    } else {
+      plan.multiframe = std::min(s.multiframe, s.temporal_radius);
+      plan.reasons.push_back(
+          "multiframe: missed rays continued in the depth buffers of up to " +
+          std::to_string(plan.multiframe) +
+          " frames each side, through their cameras (static geometry; frames whose camera "
+          "has no world transform, or is the frame's own, add nothing)");
+    }
+  }
   plan.reasons.push_back("composite: direct + emission + albedo x indirect");
   return plan;
 }
@@ -186,8 +205,9 @@ struct Pipeline::Impl {
 
   // Tracing, misses and bounces on the trace grid: the light before the denoiser, and, when
   // `grid_out` is given, the grid as a G-buffer for the temporal stage, when `coverage` is, the
-  // coverage there (gather_bounces).
-  Image trace(const GBuffer& g, GBuffer* grid_out, Image* coverage) const;
+  // coverage there (gather_bounces), when `keep` is (multiframe), what continuing rays needs.
+  Image trace(const GBuffer& g, GBuffer* grid_out, Image* coverage,
+              std::shared_ptr<detail::FrameTrace>* keep = nullptr) const;
 };
 
 Pipeline::Pipeline(const SequenceInfo& seq, const GiSettings& settings,
@@ -250,10 +270,11 @@ int pyramid_level(int scale) {
 
 }  // namespace
 
-Image Pipeline::Impl::trace(const GBuffer& g, GBuffer* grid_out, Image* coverage) const {
+Image Pipeline::Impl::trace(const GBuffer& g, GBuffer* grid_out, Image* coverage,
+                            std::shared_ptr<detail::FrameTrace>* keep) const {
   const GiSettings& s = settings;
   const Image reflected = detail::reflected_radiance(g, plan.gather_emission);
-  const detail::TraceGrid grid =
+  detail::TraceGrid grid =
       detail::make_trace_grid(g, reflected, plan.trace_scale, static_cast<float>(s.thickness));
   const detail::MissModel misses(g, s.miss, env);
   log_info("frame " + std::to_string(g.frame) + ": " + misses.describe());
@@ -272,13 +293,21 @@ Image Pipeline::Impl::trace(const GBuffer& g, GBuffer* grid_out, Image* coverage
     case Tracer::kSlices:
       break;
   }
-  return detail::gather_bounces(grid, detail::trace_slices(g, grid, s, misses), s.bounces, misses,
-                                coverage);
+  if (!keep)
+    return detail::gather_bounces(grid, detail::trace_slices(g, grid, s, misses), s.bounces, misses,
+                                  coverage);
+  detail::MissedRays missed;
+  detail::WeightedHits hits = detail::trace_slices(g, grid, s, misses, &missed);
+  Image light = detail::gather_bounces(grid, hits, s.bounces, misses, coverage);
+  *keep = std::make_shared<detail::FrameTrace>(g.frame, g.camera, std::move(grid), std::move(hits),
+                                               misses, std::move(missed));
+  return light;
 }
 
 Pipeline::TracedLight Pipeline::trace_light(const GBuffer& g) const {
   TracedLight out;
-  out.light = impl_->trace(g, &out.grid, &out.coverage);
+  out.light =
+      impl_->trace(g, &out.grid, &out.coverage, impl_->plan.multiframe > 0 ? &out.trace : nullptr);
   const int level = pyramid_level(impl_->plan.trace_scale);
   if (impl_->plan.denoise)
     out.light = detail::upsample_and_denoise(out.light, level, g.depth, g.normal,
@@ -312,6 +341,30 @@ Image Pipeline::indirect_light(const GBuffer& g, Image* coverage) const {
   if (level == 0 && !plan.denoise) return light;
   return detail::upsample_and_denoise(light, level, g.depth, g.normal,
                                       impl_->settings.denoise_settings, plan.denoise);
+}
+
+bool Pipeline::continue_light(const GBuffer& g, const std::vector<const TracedLight*>& window,
+                              int center, Image* light, Image* coverage) const {
+  std::vector<const detail::FrameTrace*> frames;
+  std::vector<const Image*> lights;
+  int c = -1;
+  for (int i = 0; i < static_cast<int>(window.size()); ++i) {
+    if (!window[i]->trace) continue;
+    if (i == center) c = static_cast<int>(frames.size());
+    frames.push_back(window[i]->trace.get());
+    lights.push_back(&window[i]->light);
+  }
+  if (c < 0) return false;
+  detail::ContinuationReport report;
+  const bool continued =
+      detail::continue_rays(frames, lights, c, impl_->settings, light, coverage, &report);
+  log_info(report.describe(frames[c]->frame));
+  // Denoised at the grid's level as trace_light's own light is.
+  const int level = pyramid_level(impl_->plan.trace_scale);
+  if (continued && impl_->plan.denoise)
+    *light = detail::upsample_and_denoise(*light, level, g.depth, g.normal,
+                                          impl_->settings.denoise_settings, true, level);
+  return continued;
 }
 
 std::string Pipeline::describe_misses(const GBuffer& g) const {

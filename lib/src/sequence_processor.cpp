@@ -16,6 +16,7 @@
 #include <thread>
 #include <utility>
 
+#include "multiframe.h"
 #include "parallel.h"
 #include "ssgi/error.h"
 #include "ssgi/log.h"
@@ -324,8 +325,7 @@ class Processor {
       if (s.read == n && s.finish) return frame;
       return std::nullopt;
     }
-    Lit lit{std::move(traced.grid), std::move(traced.light), std::move(traced.coverage), nullptr,
-            nullptr};
+    Lit lit{std::move(traced), nullptr, nullptr};
     if (still_to_write(s.read, s.output)) {
       // Kept until the frame is written: its input (headers, and with passthrough its pixels),
       // and its passes unless they can be converted again from those pixels. Motion only
@@ -361,7 +361,8 @@ class Processor {
     if (mode_ == TemporalMode::kWindow) {
       std::vector<const GBuffer*> frames;
       std::vector<const Image*> light;
-      int center = -1;
+      std::vector<const Pipeline::TracedLight*> traced;  // those multiframe reads
+      int center = -1, traced_center = -1;
       for (int f : seq_.frames_on_disk) {
         if (std::abs(f - n) > radius_) continue;
         if (const auto it = failed_.find(f); it != failed_.end()) {
@@ -374,9 +375,13 @@ class Processor {
         if (it == ring_.end())
           throw Error(ErrorKind::kInternal, seq_.pattern.path_for(f),
                       "frame " + std::to_string(f) + " of the temporal window was not lit");
-        if (f == n) center = static_cast<int>(frames.size());
-        frames.push_back(&it->second.grid);
-        light.push_back(&it->second.light);
+        if (f == n) {
+          center = static_cast<int>(frames.size());
+          traced_center = static_cast<int>(traced.size());
+        }
+        frames.push_back(&it->second.traced.grid);
+        light.push_back(&it->second.traced.light);
+        if (std::abs(f - n) <= pipeline_.plan().multiframe) traced.push_back(&it->second.traced);
       }
       Lit& lit = ring_.at(n);
       if (!lit.g) {
@@ -386,8 +391,26 @@ class Processor {
             gbuffer_from_input(seq_, n, roles, *job_.input, &pipeline_.color(), *lit.input));
         *convert_ms += ms_since(start);
       }
-      indirect = pipeline_.finish_light(*lit.g, temporal_window(frames, light, center, radius_));
-      coverage = pipeline_.finish_coverage(*lit.g, lit.grid, lit.coverage);
+      Image filtered = temporal_window(frames, light, center, radius_);
+      Image continued, continued_coverage;
+      const bool multiframe =
+          pipeline_.plan().multiframe > 0 &&
+          pipeline_.continue_light(*lit.g, traced, traced_center, &continued, &continued_coverage);
+      if (multiframe) {
+        // The window filters each frame's own light; what continuing this frame's rays changed
+        // in it is added after.
+        for (int c = 0; c < 3; ++c) {
+          float* out = filtered.plane(c);
+          const float *with = continued.plane(c), *without = lit.traced.light.plane(c);
+          for (std::size_t i = 0; i < filtered.plane_size(); ++i)
+            out[i] = std::max(out[i] + (with[i] - without[i]), 0.0f);
+        }
+      }
+      indirect = pipeline_.finish_light(*lit.g, filtered);
+      coverage = pipeline_.finish_coverage(*lit.g, lit.traced.grid,
+                                           multiframe ? continued_coverage : lit.traced.coverage);
+      // The frame's own hits and missed rays served its continuation alone.
+      if (lit.traced.trace) lit.traced.trace->release_own();
       // From now on the frame is only a neighbour: reprojection reads its trace grid.
       m->g = std::move(lit.g);
       m->input = std::move(lit.input);
@@ -457,9 +480,9 @@ class Processor {
 
   // A frame in the window's ring.
   struct Lit {
-    GBuffer grid;                      // its trace grid, what reprojection reads
-    Image light;                       // its light on the grid, before temporal filtering
-    Image coverage;                    // its coverage on the grid (Pipeline::TracedLight)
+    // Its trace grid (what reprojection reads), its own light and coverage there before
+    // temporal filtering, and with multiframe what continuing rays reads.
+    Pipeline::TracedLight traced;
     std::shared_ptr<const GBuffer> g;  // while it is still to be written (or converted again)
     std::shared_ptr<const DecodedInput> input;  // while it is still to be written
   };

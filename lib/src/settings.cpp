@@ -45,6 +45,12 @@ std::string text(const T& v) {
 
 }  // namespace
 
+std::string multiframe_text(int multiframe) {
+  if (multiframe <= 0) return "off";
+  if (multiframe >= kMultiframeWindow) return "on";
+  return "on:" + text(multiframe);
+}
+
 const char* miss_mode_name(MissMode mode) {
   switch (mode) {
     case MissMode::kEnvironment:
@@ -118,6 +124,8 @@ std::vector<std::pair<std::string, std::string>> describe_settings(const GiSetti
                                : s.temporal == TemporalMode::kEma
                                    ? "ema:" + text(s.ema_alpha)
                                    : "window:" + text(s.temporal_radius));
+  // Only when on, so that outputs written before the option existed still match.
+  if (s.multiframe) out.emplace_back("multiframe", multiframe_text(s.multiframe));
   out.emplace_back("seed", text(s.seed));
   // The colour spaces as given (the config by its path): the output's pixels depend on them.
   const ColorSettings& c = s.color;

@@ -14,6 +14,10 @@
 
 namespace ssgi {
 
+namespace detail {
+struct FrameTrace;
+}
+
 // What a run does, decided once from what the inputs provide and what the user asked: the
 // only place that chooses stages, channels and buffers.
 struct Plan {
@@ -23,6 +27,7 @@ struct Plan {
   bool env_map = false;          // misses look up an environment map
   bool denoise = false;
   TemporalMode temporal = TemporalMode::kNone;
+  int multiframe = 0;                // frames each side that missed rays are continued in (0: none)
   std::vector<std::string> reasons;  // one line per decision, for `ssgi info` and -v
 };
 
@@ -74,8 +79,17 @@ class Pipeline {
     GBuffer grid;
     Image light;     // 3 channels, the grid's size
     Image coverage;  // 1 channel, the grid's size: FrameResult::coverage there (-1: no surface)
+    // With Plan::multiframe, what continuing its rays and being continued in needs.
+    std::shared_ptr<detail::FrameTrace> trace;
   };
   TracedLight trace_light(const GBuffer& frame) const;
+
+  // Plan::multiframe: TracedLight::light and ::coverage of window[center] (frame `frame`) with
+  // its missed rays continued in the other frames of `window` (TracedLight of each, ascending
+  // frame order, within Plan::multiframe frames of the centre). False, and nothing written,
+  // when none could be (lib/src/gi/multiframe.h); -v reports how many were and found a surface.
+  bool continue_light(const GBuffer& frame, const std::vector<const TracedLight*>& window,
+                      int center, Image* light, Image* coverage) const;
 
   // Light on the trace grid (temporally filtered or not) carried to the frame's resolution by
   // the denoiser's bilateral upsampling.

@@ -96,10 +96,19 @@ struct GiSettings {
   DenoiseSettings denoise_settings;
   TemporalMode temporal = TemporalMode::kWindow;
   int temporal_radius = 2;  // window: +-K frames
-  float ema_alpha = 0.1f;   // EMA: weight of the current frame
+  // Rays that miss continued in up to this many frames on each side (lib/src/gi/multiframe.h;
+  // within the temporal window, which reads them anyway); 0: off, kMultiframeWindow: the
+  // whole window.
+  int multiframe = 0;
+  float ema_alpha = 0.1f;  // EMA: weight of the current frame
   std::uint32_t seed = 0;
   ColorSettings color;
 };
+
+// GiSettings::multiframe for "as many frames as the temporal window has".
+constexpr int kMultiframeWindow = 64;
+// GiSettings::multiframe as --multiframe takes it: "off", "on" (kMultiframeWindow), "on:K".
+std::string multiframe_text(int multiframe);
 
 // The presets (--preset): `draft` for look development, `default` (what GiSettings{} holds),
 // `final` for delivery. Sets the tracing settings of `name` on *settings, leaving the others.

@@ -24,6 +24,20 @@ double interleaved_gradient_noise(double x, double y);
 // (Cranley-Patterson), so that a pixel's rays are stratified and neighbouring pixels differ.
 void ray_sample(const PixelNoise& noise, int k, float* u1, float* u2, float* jitter);
 
+// SplitMix64's finaliser: a 64-bit hash for random choices that are pure functions of their
+// inputs (pixel, frame, seed, ray), whatever the thread or chunk.
+inline std::uint64_t mix64(std::uint64_t h) {
+  h += 0x9E3779B97F4A7C15ull;
+  h = (h ^ (h >> 30)) * 0xBF58476D1CE4E5B9ull;
+  h = (h ^ (h >> 27)) * 0x94D049BB133111EBull;
+  return h ^ (h >> 31);
+}
+
+// A uniform float in [0, 1) from a hash's top 24 bits.
+inline float unit_float(std::uint64_t h) {
+  return static_cast<float>(h >> 40) * (1.0f / 16777216.0f);
+}
+
 // Cosine-weighted direction around the unit normal `n` from two uniforms (Malley's method,
 // with the branchless orthonormal basis of Duff et al. 2017).
 Vec3f cosine_hemisphere(const Vec3f& n, float u1, float u2);

@@ -81,6 +81,9 @@ class HitSource {
   virtual const Image& miss() const = 0;
   virtual const Image& env() const = 0;
   virtual const Image& cube() const = 0;
+  // Per trace sample, light that continued rays brought from other frames (3 channels,
+  // multiframe.h), the same in every bounce, counted as traced; null when there is none.
+  virtual const Image* foreign() const { return nullptr; }
 };
 
 // Indirect light at the trace grid after `bounces` gathers over `hits`: a hit brings its

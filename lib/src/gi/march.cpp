@@ -11,6 +11,180 @@
 namespace ssgi::detail {
 namespace {
 
+// Samples the segment at `steps` evenly spaced, jittered points: a sample hits when it is
+// inside a slab, or when the ray passed the front of one continuous surface since the last
+// sample. Approximate (it can step over a thin slab or hit a pixel late); used when the ray
+// is longer than the step budget.
+int march_sampled(const DepthMesh& mesh, const ScreenSegment& s, int steps, float jitter,
+                  int self_x, int self_y) {
+  const SurfaceModel& model = mesh.model();
+  const float df = (s.f_hi - s.f_lo) / steps;
+  const float inf = std::numeric_limits<float>::infinity();
+  bool prev_valid = false, prev_in_front = false;
+  float prev_z = 0.0f;
+  for (int i = 0; i < steps; ++i) {
+    const float f = s.f_lo + df * (i + jitter);
+    const float sx = s.sx0 + s.dx * f, sy = s.sy0 + s.dy * f;
+    if (static_cast<int>(std::floor(sx)) == self_x && static_cast<int>(std::floor(sy)) == self_y)
+      continue;
+    MeshPoint surface;
+    if (!mesh.surface_at(sx, sy, &surface)) {
+      prev_valid = false;
+      continue;
+    }
+    const float hr = s.h0 + (s.h1 - s.h0) * f;
+    const float z_ray = hr > 0 ? 1.0f / hr : inf;
+    const bool behind_front = z_ray >= surface.z;
+    if (behind_front && (z_ray <= model.slab_back(surface.z) ||
+                         (prev_valid && prev_in_front && model.connected(prev_z, surface.z))))
+      return surface.pixel;
+    prev_valid = true;
+    prev_in_front = !behind_front;
+    prev_z = surface.z;
+  }
+  return -1;
+}
+
+// The part [*lo, *hi] of the segment inside the box [x0, x1] x [y0, y1] (Liang-Barsky);
+// leaves them unchanged when the segment misses the box.
+void clip_to_box(const ScreenSegment& s, float x0, float y0, float x1, float y1, float* lo,
+                 float* hi) {
+  float a = -std::numeric_limits<float>::infinity(), b = std::numeric_limits<float>::infinity();
+  auto clip = [&](float p, float q) {
+    if (p == 0) return q >= 0;
+    const float r = q / p;
+    if (p < 0) {
+      if (r > b) return false;
+      a = std::max(a, r);
+    } else {
+      if (r < a) return false;
+      b = std::min(b, r);
+    }
+    return true;
+  };
+  if (clip(-s.dx, s.sx0 - x0) && clip(s.dx, x1 - s.sx0) && clip(-s.dy, s.sy0 - y0) &&
+      clip(s.dy, y1 - s.sy0) && a <= b) {
+    *lo = a;
+    *hi = b;
+  }
+}
+
+// Walks every mesh triangle the segment crosses, in order (a 2-D DDA over the quads of pixel
+// centres, each split at its diagonal), and solves exactly where the ray is inside the
+// triangle's slab: within one triangle the ray's and the surface's inverse depths are both
+// affine in f, so "behind the front, before the back" is an interval. The first point of it
+// outside the ray's own pixel is the hit. This is the surface model itself, which the Embree
+// reference traces too.
+int walk_exact(const DepthMesh& mesh, const ScreenSegment& s, int self_x, int self_y) {
+  const SurfaceModel& model = mesh.model();
+  float own_lo = 2.0f, own_hi = 2.0f;  // where the segment is inside its own pixel
+  clip_to_box(s, self_x, self_y, self_x + 1.0f, self_y + 1.0f, &own_lo, &own_hi);
+  const float past_own = kPastEdgePx / std::max(std::fabs(s.dx), std::fabs(s.dy));
+  const float u0 = s.sx0 - 0.5f, v0 = s.sy0 - 0.5f;  // lattice of pixel centres
+  const float inf = std::numeric_limits<float>::infinity();
+  const float f_start = s.f_lo;
+  int i = static_cast<int>(std::floor(u0 + s.dx * f_start));
+  int j = static_cast<int>(std::floor(v0 + s.dy * f_start));
+  const int step_i = s.dx > 0 ? 1 : -1, step_j = s.dy > 0 ? 1 : -1;
+  float next_u = s.dx != 0 ? ((step_i > 0 ? i + 1 : i) - u0) / s.dx : inf;
+  float next_v = s.dy != 0 ? ((step_j > 0 ? j + 1 : j) - v0) / s.dy : inf;
+  const float delta_u = s.dx != 0 ? 1.0f / std::fabs(s.dx) : inf;
+  const float delta_v = s.dy != 0 ? 1.0f / std::fabs(s.dy) : inf;
+  const float inv_k = 1.0f / (1.0f + model.thickness);
+
+  // The first point of [fa, fb] inside the slab of the triangle of quad (i, j) it lies in.
+  auto piece = [&](float fa, float fb) {
+    if (!(fb > fa)) return -1;
+    const float fm = 0.5f * (fa + fb);
+    const bool upper = (u0 + s.dx * fm - i) >= (v0 + s.dy * fm - j);
+    if (!mesh.has_triangle(i, j, upper)) return -1;
+    const float surf_a = mesh.inverse_depth_at(i, j, upper, u0 + s.dx * fa - i, v0 + s.dy * fa - j);
+    const float surf_b = mesh.inverse_depth_at(i, j, upper, u0 + s.dx * fb - i, v0 + s.dy * fb - j);
+    const float ray_a = s.h0 + (s.h1 - s.h0) * fa, ray_b = s.h0 + (s.h1 - s.h0) * fb;
+    float lo = fa, hi = fb;
+    // Keeps the part of [lo, hi] where the affine r (ra at fa, rb at fb) is >= 0.
+    auto keep_non_negative = [&](float ra, float rb) {
+      if (ra >= 0 && rb >= 0) return true;
+      if (ra < 0 && rb < 0) return false;
+      const float fr = fa + (fb - fa) * (ra / (ra - rb));
+      if (ra >= 0)
+        hi = std::min(hi, fr);
+      else
+        lo = std::max(lo, fr);
+      return lo <= hi;
+    };
+    // Behind the front (1/z_ray <= 1/z_surface), before the back (1/z_ray >= k / z_surface).
+    if (!keep_non_negative(surf_a - ray_a, surf_b - ray_b) ||
+        !keep_non_negative(ray_a - inv_k * surf_a, ray_b - inv_k * surf_b))
+      return -1;
+    float f = lo;
+    if (f >= own_lo && f <= own_hi) {
+      f = own_hi + past_own;
+      if (f > hi) return -1;
+    }
+    return mesh.heaviest_vertex(i, j, upper, u0 + s.dx * f - i, v0 + s.dy * f - j);
+  };
+
+  float f = f_start;
+  const int max_cells = 2 * (mesh.width() + mesh.height()) + 4;
+  for (int cell = 0; cell < max_cells && f < s.f_hi; ++cell) {
+    const float fe = std::min(std::min(next_u, next_v), s.f_hi);
+    if (fe > f) {
+      // The diagonal (i, j)-(i+1, j+1), where u - i = v - j, splits the quad in two.
+      const float fd =
+          s.dx != s.dy
+              ? ((static_cast<float>(i) - u0) - (static_cast<float>(j) - v0)) / (s.dx - s.dy)
+              : inf;
+      int hit;
+      if (fd > f && fd < fe) {
+        hit = piece(f, fd);
+        if (hit < 0) hit = piece(fd, fe);
+      } else {
+        hit = piece(f, fe);
+      }
+      if (hit >= 0) return hit;
+      f = fe;
+    }
+    if (next_u < next_v) {
+      i += step_i;
+      next_u += delta_u;
+    } else {
+      j += step_j;
+      next_v += delta_v;
+    }
+  }
+  return -1;
+}
+
+}  // namespace
+
+bool clip_to_window(ScreenSegment* s, float width, float height) {
+  auto clip = [&](float p, float q) {
+    if (p == 0) return q >= 0;
+    const float r = q / p;
+    if (p < 0) {
+      if (r > s->f_hi) return false;
+      s->f_lo = std::max(s->f_lo, r);
+    } else {
+      if (r < s->f_lo) return false;
+      s->f_hi = std::min(s->f_hi, r);
+    }
+    return true;
+  };
+  return clip(-s->dx, s->sx0) && clip(s->dx, width - s->sx0) && clip(-s->dy, s->sy0) &&
+         clip(s->dy, height - s->sy0) && s->f_hi > s->f_lo;
+}
+
+int march_segment(const DepthMesh& mesh, const ScreenSegment& s, int max_steps, float jitter,
+                  int self_x, int self_y) {
+  const float length_px = std::max(std::fabs(s.dx), std::fabs(s.dy)) * (s.f_hi - s.f_lo);
+  return length_px <= static_cast<float>(max_steps)
+             ? walk_exact(mesh, s, self_x, self_y)
+             : march_sampled(mesh, s, max_steps, jitter, self_x, self_y);
+}
+
+namespace {
+
 struct Tracer {
   const GBuffer& g;
   const GiSettings& settings;
@@ -52,184 +226,14 @@ struct Tracer {
     if (!std::isfinite(dx) || !std::isfinite(dy)) return -1;
 
     // Clip the screen segment to the data window (Liang-Barsky); beyond it is a miss.
-    float f_lo = 0.0f, f_hi = 1.0f;
-    auto clip = [&](float p, float q) {
-      if (p == 0) return q >= 0;
-      const float r = q / p;
-      if (p < 0) {
-        if (r > f_hi) return false;
-        f_lo = std::max(f_lo, r);
-      } else {
-        if (r < f_lo) return false;
-        f_hi = std::min(f_hi, r);
-      }
-      return true;
-    };
-    if (!clip(-dx, sx0) || !clip(dx, width - sx0) || !clip(-dy, sy0) || !clip(dy, height - sy0) ||
-        !(f_hi > f_lo))
-      return -1;
-    const bool leaves_screen = f_hi < 1.0f;
-
-    const float span = f_hi - f_lo;
-    const float length_px = std::max(std::fabs(dx), std::fabs(dy)) * span;
-    const Segment seg{sx0, sy0, dx, dy, h0, h1, f_lo, f_hi};
-    const int hit = length_px <= static_cast<float>(settings.max_steps)
-                        ? walk_exact(seg, self_x, self_y)
-                        : march_sampled(seg, settings.max_steps, jitter, self_x, self_y);
+    ScreenSegment seg{sx0, sy0, dx, dy, h0, h1, 0.0f, 1.0f};
+    if (!clip_to_window(&seg, static_cast<float>(width), static_cast<float>(height))) return -1;
+    const bool leaves_screen = seg.f_hi < 1.0f;
+    const int hit = march_segment(mesh, seg, settings.max_steps, jitter, self_x, self_y);
     if (hit >= 0) return hit;
     if (leaves_screen && settings.miss == MissMode::kExtend)
-      return extend_edge(o, d, sx0 + dx * f_hi, sy0 + dy * f_hi);
+      return extend_edge(o, d, sx0 + dx * seg.f_hi, sy0 + dy * seg.f_hi);
     return -1;
-  }
-
-  // A ray's screen segment: data-window pixel position s0 + f (s1 - s0) and inverse depth
-  // h0 + f (h1 - h0) (linear in screen space), for f in [f_lo, f_hi].
-  struct Segment {
-    float sx0, sy0, dx, dy, h0, h1, f_lo, f_hi;
-  };
-
-  // Samples the segment at `steps` evenly spaced, jittered points: a sample hits when it is
-  // inside a slab, or when the ray passed the front of one continuous surface since the last
-  // sample. Approximate (it can step over a thin slab or hit a pixel late); used when the ray
-  // is longer than the step budget.
-  int march_sampled(const Segment& s, int steps, float jitter, int self_x, int self_y) const {
-    const float df = (s.f_hi - s.f_lo) / steps;
-    const float inf = std::numeric_limits<float>::infinity();
-    bool prev_valid = false, prev_in_front = false;
-    float prev_z = 0.0f;
-    for (int i = 0; i < steps; ++i) {
-      const float f = s.f_lo + df * (i + jitter);
-      const float sx = s.sx0 + s.dx * f, sy = s.sy0 + s.dy * f;
-      if (static_cast<int>(std::floor(sx)) == self_x && static_cast<int>(std::floor(sy)) == self_y)
-        continue;
-      MeshPoint surface;
-      if (!mesh.surface_at(sx, sy, &surface)) {
-        prev_valid = false;
-        continue;
-      }
-      const float hr = s.h0 + (s.h1 - s.h0) * f;
-      const float z_ray = hr > 0 ? 1.0f / hr : inf;
-      const bool behind_front = z_ray >= surface.z;
-      if (behind_front && (z_ray <= model.slab_back(surface.z) ||
-                           (prev_valid && prev_in_front && model.connected(prev_z, surface.z))))
-        return surface.pixel;
-      prev_valid = true;
-      prev_in_front = !behind_front;
-      prev_z = surface.z;
-    }
-    return -1;
-  }
-
-  // Walks every mesh triangle the segment crosses, in order (a 2-D DDA over the quads of pixel
-  // centres, each split at its diagonal), and solves exactly where the ray is inside the
-  // triangle's slab: within one triangle the ray's and the surface's inverse depths are both
-  // affine in f, so "behind the front, before the back" is an interval. The first point of it
-  // outside the ray's own pixel is the hit. This is the surface model itself, which the Embree
-  // reference traces too.
-  int walk_exact(const Segment& s, int self_x, int self_y) const {
-    float own_lo = 2.0f, own_hi = 2.0f;  // where the segment is inside its own pixel
-    clip_to_box(s, self_x, self_y, self_x + 1.0f, self_y + 1.0f, &own_lo, &own_hi);
-    const float past_own = kPastEdgePx / std::max(std::fabs(s.dx), std::fabs(s.dy));
-    const float u0 = s.sx0 - 0.5f, v0 = s.sy0 - 0.5f;  // lattice of pixel centres
-    const float inf = std::numeric_limits<float>::infinity();
-    const float f_start = s.f_lo;
-    int i = static_cast<int>(std::floor(u0 + s.dx * f_start));
-    int j = static_cast<int>(std::floor(v0 + s.dy * f_start));
-    const int step_i = s.dx > 0 ? 1 : -1, step_j = s.dy > 0 ? 1 : -1;
-    float next_u = s.dx != 0 ? ((step_i > 0 ? i + 1 : i) - u0) / s.dx : inf;
-    float next_v = s.dy != 0 ? ((step_j > 0 ? j + 1 : j) - v0) / s.dy : inf;
-    const float delta_u = s.dx != 0 ? 1.0f / std::fabs(s.dx) : inf;
-    const float delta_v = s.dy != 0 ? 1.0f / std::fabs(s.dy) : inf;
-    const float inv_k = 1.0f / (1.0f + model.thickness);
-
-    // The first point of [fa, fb] inside the slab of the triangle of quad (i, j) it lies in.
-    auto piece = [&](float fa, float fb) {
-      if (!(fb > fa)) return -1;
-      const float fm = 0.5f * (fa + fb);
-      const bool upper = (u0 + s.dx * fm - i) >= (v0 + s.dy * fm - j);
-      if (!mesh.has_triangle(i, j, upper)) return -1;
-      const float surf_a =
-          mesh.inverse_depth_at(i, j, upper, u0 + s.dx * fa - i, v0 + s.dy * fa - j);
-      const float surf_b =
-          mesh.inverse_depth_at(i, j, upper, u0 + s.dx * fb - i, v0 + s.dy * fb - j);
-      const float ray_a = s.h0 + (s.h1 - s.h0) * fa, ray_b = s.h0 + (s.h1 - s.h0) * fb;
-      float lo = fa, hi = fb;
-      // Keeps the part of [lo, hi] where the affine r (ra at fa, rb at fb) is >= 0.
-      auto keep_non_negative = [&](float ra, float rb) {
-        if (ra >= 0 && rb >= 0) return true;
-        if (ra < 0 && rb < 0) return false;
-        const float fr = fa + (fb - fa) * (ra / (ra - rb));
-        if (ra >= 0)
-          hi = std::min(hi, fr);
-        else
-          lo = std::max(lo, fr);
-        return lo <= hi;
-      };
-      // Behind the front (1/z_ray <= 1/z_surface), before the back (1/z_ray >= k / z_surface).
-      if (!keep_non_negative(surf_a - ray_a, surf_b - ray_b) ||
-          !keep_non_negative(ray_a - inv_k * surf_a, ray_b - inv_k * surf_b))
-        return -1;
-      float f = lo;
-      if (f >= own_lo && f <= own_hi) {
-        f = own_hi + past_own;
-        if (f > hi) return -1;
-      }
-      return mesh.heaviest_vertex(i, j, upper, u0 + s.dx * f - i, v0 + s.dy * f - j);
-    };
-
-    float f = f_start;
-    const int max_cells = 2 * (mesh.width() + mesh.height()) + 4;
-    for (int cell = 0; cell < max_cells && f < s.f_hi; ++cell) {
-      const float fe = std::min(std::min(next_u, next_v), s.f_hi);
-      if (fe > f) {
-        // The diagonal (i, j)-(i+1, j+1), where u - i = v - j, splits the quad in two.
-        const float fd =
-            s.dx != s.dy
-                ? ((static_cast<float>(i) - u0) - (static_cast<float>(j) - v0)) / (s.dx - s.dy)
-                : inf;
-        int hit;
-        if (fd > f && fd < fe) {
-          hit = piece(f, fd);
-          if (hit < 0) hit = piece(fd, fe);
-        } else {
-          hit = piece(f, fe);
-        }
-        if (hit >= 0) return hit;
-        f = fe;
-      }
-      if (next_u < next_v) {
-        i += step_i;
-        next_u += delta_u;
-      } else {
-        j += step_j;
-        next_v += delta_v;
-      }
-    }
-    return -1;
-  }
-
-  // The part [*lo, *hi] of the segment inside the box [x0, x1] x [y0, y1] (Liang-Barsky);
-  // leaves them unchanged when the segment misses the box.
-  static void clip_to_box(const Segment& s, float x0, float y0, float x1, float y1, float* lo,
-                          float* hi) {
-    float a = -std::numeric_limits<float>::infinity(), b = std::numeric_limits<float>::infinity();
-    auto clip = [&](float p, float q) {
-      if (p == 0) return q >= 0;
-      const float r = q / p;
-      if (p < 0) {
-        if (r > b) return false;
-        a = std::max(a, r);
-      } else {
-        if (r < a) return false;
-        b = std::min(b, r);
-      }
-      return true;
-    };
-    if (clip(-s.dx, s.sx0 - x0) && clip(s.dx, x1 - s.sx0) && clip(-s.dy, s.sy0 - y0) &&
-        clip(s.dy, y1 - s.sy0) && a <= b) {
-      *lo = a;
-      *hi = b;
-    }
   }
 
   // MissMode::kExtend: the surface at the pixel where the ray leaves the screen continues as

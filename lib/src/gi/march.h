@@ -25,6 +25,24 @@ constexpr float kFarFactor = 1e6f;
 // is taken this far (in pixels) past the square's edge.
 constexpr float kPastEdgePx = 1e-3f;
 
+// A ray's screen segment: data-window pixel position s0 + f (s1 - s0) and inverse depth
+// h0 + f (h1 - h0) (linear in screen space), for f in [f_lo, f_hi].
+struct ScreenSegment {
+  float sx0, sy0, dx, dy, h0, h1, f_lo, f_hi;
+};
+
+// Narrows [f_lo, f_hi] to the part of the segment inside [0, width] x [0, height]
+// (Liang-Barsky); false when nothing of it is.
+bool clip_to_window(ScreenSegment* s, float width, float height);
+
+// The pixel whose light the segment's first hit on `mesh` brings, or -1, never pixel (self_x,
+// self_y) (the ray's own). A segment up to `max_steps` pixels long walks every triangle it
+// crosses and solves where it enters a slab (the surface model itself, which the Embree
+// reference traces too); a longer one samples `max_steps` evenly spaced points, offset by
+// `jitter` in [0, 1) of a step, and can step over a thin slab.
+int march_segment(const DepthMesh& mesh, const ScreenSegment& s, int max_steps, float jitter,
+                  int self_x, int self_y);
+
 // The hemisphere rays of surface pixel (x, y) (data window): the origin is the pixel centre at
 // its depth, offset along the normal by start_offset x depth; ray k's direction and march
 // jitter come from the pixel's noise. The march and the Embree reference both use it, so ray k

@@ -141,6 +141,18 @@ class PackedMesh {
   std::vector<MeshTexel> texels_;
 };
 
+// The random choices of record_slice_misses: a pure function of the pixel, frame, seed and
+// slice.
+std::uint64_t pixel_key(int x, int y, int frame, std::uint32_t seed) {
+  return mix64(mix64(mix64(static_cast<std::uint64_t>(static_cast<std::uint32_t>(x)) << 32 |
+                           static_cast<std::uint32_t>(y)) ^
+                     static_cast<std::uint32_t>(frame)) ^
+               seed);
+}
+std::uint64_t slice_hash(std::uint64_t key, int slice) {
+  return mix64(key ^ static_cast<std::uint64_t>(slice) << 48);
+}
+
 SideSamples& scratch() {
   thread_local SideSamples samples;
   return samples;
@@ -230,9 +242,58 @@ struct SliceTracer {
     }
   }
 
-  // Traces the slices of trace sample `s` from pixel `p`; appends its hits.
+  // The missed sectors of a slice as rays for other frames to continue (multiframe.h): per
+  // group of four neighbouring sectors, one ray for all its missed ones, through a point drawn
+  // uniformly in the slice's measure over them (one of them at random, then a point within
+  // it), so that the continued light is unbiased whatever the ray finds. The point's angle
+  // inverts the measure by interpolation in a table of it over the half-disc.
+  void record_slice_misses(std::uint32_t missed, const SliceMeasure& measure, const Angle& lowest,
+                           float h_lo, float to_sector, float u_rot, const V3& view, const V3& t,
+                           float sector_weight, std::uint64_t key, PixelMisses* record) const {
+    constexpr int kSteps = 64, kGroup = 4;
+    constexpr float step = kPi / kSteps;
+    static const float cos_step = std::cos(step), sin_step = std::sin(step);
+    float table[kSteps + 1], cosines[kSteps + 1], sines[kSteps + 1];
+    float c = lowest.c, s = lowest.s;
+    for (int i = 0; i <= kSteps; ++i) {
+      cosines[i] = c;
+      sines[i] = s;
+      table[i] = measure(Angle{lowest.theta + static_cast<float>(i) * step, s, c});
+      const float cn = c * cos_step - s * sin_step;
+      s = s * cos_step + c * sin_step;
+      c = cn;
+    }
+    int i = 0;
+    for (int group = 0; group < kSectors / kGroup; ++group) {
+      const std::uint32_t bits = missed >> (group * kGroup) & ((1u << kGroup) - 1u);
+      if (!bits) continue;
+      const int count = sector_count(bits);
+      key = mix64(key + static_cast<std::uint64_t>(group));
+      // One of the missed sectors, then a point across it (sector k spans coordinates
+      // k -+ 1/2).
+      int pick = static_cast<int>(unit_float(key) * static_cast<float>(count));
+      int k = group * kGroup;
+      for (std::uint32_t b = bits;; b >>= 1, ++k)
+        if ((b & 1u) && pick-- == 0) break;
+      const float u = static_cast<float>(k) + unit_float(mix64(key)) - 0.5f;
+      const float m = std::clamp((u + u_rot) / to_sector + h_lo, table[0], table[kSteps]);
+      while (i < kSteps - 1 && table[i + 1] < m) ++i;
+      const float span = table[i + 1] - table[i];
+      const float delta = span > 0 ? (m - table[i]) / span * step : 0.0f;
+      // cos and sin of angle i + delta by rotation (delta < pi / 64: the series are exact to
+      // float precision).
+      const float cd = 1.0f - 0.5f * delta * delta, sd = delta - delta * delta * delta / 6.0f;
+      const float cm = cosines[i] * cd - sines[i] * sd, sm = sines[i] * cd + cosines[i] * sd;
+      const V3 d = normalized(cm * view + sm * t);
+      record->push_back({{d.x, d.y, d.z}, sector_weight * static_cast<float>(count)});
+    }
+  }
+
+  // Traces the slices of trace sample `s` from pixel `p`; appends its hits, and with `record`
+  // its missed rays (record_slice_misses) and into *ray_origin where they start.
   void trace(int p, std::vector<std::int32_t>* pixels, std::vector<float>* weights, float* miss,
-             float env_light[3], float cube[kCubeFaces]) const {
+             float env_light[3], float cube[kCubeFaces], PixelMisses* record,
+             Vec3f* ray_origin) const {
     const int x = p % w, y = p / w;
     const float z0 = g.depth.plane(0)[p];
     const V3 n{g.normal.plane(0)[p], g.normal.plane(1)[p], g.normal.plane(2)[p]};
@@ -240,6 +301,7 @@ struct SliceTracer {
     const float to_grid = 1.0f / static_cast<float>(grid.scale);
     const V3 origin = z0 * ray((x + 0.5f) * to_grid, (y + 0.5f) * to_grid) + offset * n;
     const V3 view = normalized(-1.0f * origin);
+    if (ray_origin) *ray_origin = {origin.x, origin.y, origin.z};
     // A point floats cannot hold (a depth near FLT_MAX; found by fuzzing) brings no light, rather
     // than NaN angles indexing the azimuth table.
     if (!std::isfinite(view.x + view.y + view.z)) return;
@@ -256,6 +318,8 @@ struct SliceTracer {
     const int display_x = x + g.data_window.x0 - g.display_window.x0;
     const int display_y = y + g.data_window.y0 - g.display_window.y0;
     const PixelNoise noise = pixel_noise(display_x, display_y, g.frame, settings.seed);
+    const std::uint64_t noise_key =
+        record ? pixel_key(display_x, display_y, g.frame, settings.seed) : 0;
     const int slices = settings.slices, steps = settings.max_steps;
     const float max_distance = static_cast<float>(settings.max_distance);
     const std::uint32_t all = ~0u;
@@ -343,15 +407,21 @@ struct SliceTracer {
       if (missed)
         add_slice_misses(missed, measure, lowest, h_lo, to_sector, u_rot, view, t, sector_weight,
                          env_light, cube);
+      if (missed && record)
+        record_slice_misses(missed, measure, lowest, h_lo, to_sector, u_rot, view, t, sector_weight,
+                            slice_hash(noise_key, i), record);
     }
     // Each slice's weight |n_p| x its measure has mean 1 over the slice angles; dividing by the
     // sampled slices' own total makes a pixel's weights sum to 1 exactly (a ratio estimator:
     // the furnace stays exact, and the weights' variance is gone), at the same limit.
     if (!(total_weight > 0)) {
       *miss = 1.0f;
+      if (record) record->clear();
       return;
     }
     const float norm = 1.0f / total_weight;
+    if (record)
+      for (MissedRay& r : *record) r.weight *= norm;
     pixels->insert(pixels->end(), hits.pixel.begin(), hits.pixel.begin() + kept);
     for (int e = 0; e < kept; ++e) weights->push_back(hits.weight[e] * norm);
     *miss *= norm;
@@ -363,7 +433,7 @@ struct SliceTracer {
 }  // namespace
 
 WeightedHits trace_slices(const GBuffer& g, const TraceGrid& grid, const GiSettings& settings,
-                          const MissModel& misses) {
+                          const MissModel& misses, MissedRays* missed) {
   const SliceTracer tracer(g, grid, settings, misses);
   WeightedHits hits;
   hits.miss = Image(grid.width, grid.height, 1);
@@ -374,7 +444,12 @@ WeightedHits trace_slices(const GBuffer& g, const TraceGrid& grid, const GiSetti
   std::vector<std::vector<std::int32_t>> row_pixels(grid.height);
   std::vector<std::vector<float>> row_weights(grid.height);
   std::vector<std::vector<std::uint32_t>> row_counts(grid.height);
+  std::vector<PixelMisses> row_missed(missed ? grid.height : 0);
+  std::vector<std::vector<std::uint32_t>> row_missed_counts(row_missed.size());
+  if (missed) missed->origin.assign(grid.origin.size(), Vec3f{0, 0, 0});
   parallel_for_rows(grid.height, [&](int by) {
+    PixelMisses pixel_missed;
+    if (missed) row_missed_counts[by].assign(grid.width, 0);
     std::vector<std::int32_t>& px = row_pixels[by];
     std::vector<float>& wt = row_weights[by];
     std::vector<std::uint32_t>& counts = row_counts[by];
@@ -385,8 +460,14 @@ WeightedHits trace_slices(const GBuffer& g, const TraceGrid& grid, const GiSetti
       if (p < 0) continue;
       const std::size_t before = px.size();
       float miss = 0, env_light[3] = {0, 0, 0}, cube[kCubeFaces] = {0, 0, 0, 0, 0, 0};
-      tracer.trace(p, &px, &wt, &miss, env_light, cube);
+      pixel_missed.clear();
+      tracer.trace(p, &px, &wt, &miss, env_light, cube, missed ? &pixel_missed : nullptr,
+                   missed ? &missed->origin[s] : nullptr);
       counts[bx] = static_cast<std::uint32_t>(px.size() - before);
+      if (missed) {
+        row_missed[by].insert(row_missed[by].end(), pixel_missed.begin(), pixel_missed.end());
+        row_missed_counts[by][bx] = static_cast<std::uint32_t>(pixel_missed.size());
+      }
       hits.miss.plane(0)[s] = miss;
       for (int c = 0; c < 3; ++c) hits.env.plane(c)[s] = env_light[c];
       for (int f = 0; f < kCubeFaces; ++f) hits.cube.plane(f)[s] = cube[f];
@@ -411,6 +492,19 @@ WeightedHits trace_slices(const GBuffer& g, const TraceGrid& grid, const GiSetti
     row_weights[by] = {};
   });
   hits.begin.back() = row_start.back();
+  if (missed) {
+    missed->begin.assign(grid.origin.size() + 1, 0);
+    missed->rays.clear();
+    for (int by = 0; by < grid.height; ++by) {
+      std::uint32_t at = static_cast<std::uint32_t>(missed->rays.size());
+      for (int bx = 0; bx < grid.width; ++bx) {
+        missed->begin[static_cast<std::size_t>(by) * grid.width + bx] = at;
+        at += row_missed_counts[by][bx];
+      }
+      missed->rays.insert(missed->rays.end(), row_missed[by].begin(), row_missed[by].end());
+    }
+    missed->begin.back() = static_cast<std::uint32_t>(missed->rays.size());
+  }
   return hits;
 }
 

@@ -1,0 +1,345 @@
+#include "multiframe.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <utility>
+
+#include "march.h"
+#include "parallel.h"
+#include "surface_model.h"
+
+namespace ssgi::detail {
+namespace {
+
+// Camera space of one frame to camera space of another, in floats (p' = R p + t).
+struct Rigid {
+  float r[3][3], t[3];
+  Vec3f point(const Vec3f& p) const {
+    return {r[0][0] * p.x + r[0][1] * p.y + r[0][2] * p.z + t[0],
+            r[1][0] * p.x + r[1][1] * p.y + r[1][2] * p.z + t[1],
+            r[2][0] * p.x + r[2][1] * p.y + r[2][2] * p.z + t[2]};
+  }
+  Vec3f direction(const Vec3f& d) const {
+    return {r[0][0] * d.x + r[0][1] * d.y + r[0][2] * d.z,
+            r[1][0] * d.x + r[1][1] * d.y + r[1][2] * d.z,
+            r[2][0] * d.x + r[2][1] * d.y + r[2][2] * d.z};
+  }
+};
+
+// From camera `from`'s space to camera `to`'s (row-vector matrices: from's camera-to-world,
+// then to's world-to-camera).
+Rigid between(const Camera& from, const Camera& to) {
+  const Mat4d m = from.world_to_camera.inverse() * to.world_to_camera;
+  Rigid out;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) out.r[i][j] = static_cast<float>(m.m[j][i]);
+    out.t[i] = static_cast<float>(m.m[3][i]);
+  }
+  return out;
+}
+
+bool same_camera(const Camera& a, const Camera& b) {
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j)
+      if (a.world_to_camera.m[i][j] != b.world_to_camera.m[i][j]) return false;
+  return true;
+}
+
+// A ray's march jitter in [0, 1): a hash of the trace sample, the ray and the frame (the same
+// for any thread count and chunking).
+float ray_jitter(std::size_t sample, std::size_t ray, int frame, std::uint32_t seed) {
+  return unit_float(
+      mix64(mix64(mix64(sample) ^ ray) ^
+            (static_cast<std::uint64_t>(static_cast<std::uint32_t>(frame)) << 32 | seed)));
+}
+
+// One frame as the continued rays see it: its grid's mesh, its camera, and the light a hit
+// on each trace sample brings (front at 2 s, unseen back at 2 s + 1).
+struct View {
+  const FrameTrace* trace;
+  DepthMesh mesh;
+  std::vector<std::array<float, 3>> light;
+
+  View(const FrameTrace& t, const Image& own_light, const SurfaceModel& model)
+      : trace(&t), mesh(t.grid.depth, model), light(2 * t.grid.origin.size()) {
+    const TraceGrid& g = t.grid;
+    for (std::size_t s = 0; s < g.origin.size(); ++s)
+      for (int c = 0; c < 3; ++c) {
+        const float back = g.origin[s] < 0 ? 0.0f : g.albedo.plane(c)[s] * own_light.plane(c)[s];
+        light[2 * s][c] = g.reflected.plane(c)[s] + back;
+        light[2 * s + 1][c] = back;
+      }
+  }
+
+  // The camera-space point of trace sample s's vertex.
+  Vec3f vertex(std::int32_t s) const {
+    const TraceGrid& g = trace->grid;
+    const float z = g.depth.plane(0)[s];
+    const float sx = static_cast<float>(s % g.width) + 0.5f;
+    const float sy = static_cast<float>(s / g.width) + 0.5f;
+    return {(sx - g.cx) / g.fx * z, (g.cy - sy) / g.fy * z, z};
+  }
+};
+
+struct Neighbour {
+  const View* view;
+  Rigid from_center, to_center;
+};
+
+// Where ray (o, d) (camera space, o inside the view) leaves the view of trace grid `g` (its
+// pyramid of sight beyond kNearFraction x `scale`): the infinite float when it never does (its
+// vanishing point is in view).
+float leaves_view(const TraceGrid& g, const Vec3f& o, const Vec3f& d, float scale) {
+  float t = std::numeric_limits<float>::infinity();
+  // Each side as a x p + b >= 0 inside the view.
+  auto side = [&](float ax, float ay, float az, float b) {
+    const float at = ax * o.x + ay * o.y + az * o.z + b, slope = ax * d.x + ay * d.y + az * d.z;
+    if (slope < 0) t = std::min(t, std::max(at, 0.0f) / -slope);
+  };
+  const float w = static_cast<float>(g.width), h = static_cast<float>(g.height);
+  side(g.fx, 0, g.cx, 0);       // sx >= 0
+  side(-g.fx, 0, w - g.cx, 0);  // sx <= width
+  side(0, -g.fy, g.cy, 0);      // sy >= 0
+  side(0, g.fy, h - g.cy, 0);   // sy <= height
+  side(0, 0, 1, -kNearFraction * scale);
+  return t;
+}
+
+// Where ray (o, d) of the centre frame, free in its view up to `t_exit` where it leaves the
+// view (leaves_view), first passes behind what the frame shows by more than the slab: the
+// parameter of the last free sample before that point, of `steps` jittered samples evenly spaced
+// on the screen (so the frame's own tracer's rule), or t_exit when it never does.
+float first_hidden(const View& own, const Vec3f& o, const Vec3f& d, float t_exit, float scale,
+                   int steps, float jitter) {
+  const TraceGrid& g = own.trace->grid;
+  const float t1 = std::isinf(t_exit) ? kFarFactor * scale : t_exit;
+  const Vec3f b{o.x + t1 * d.x, o.y + t1 * d.y, o.z + t1 * d.z};
+  if (!(o.z > 0) || !(b.z > 0)) return t_exit;
+  const float h0 = 1.0f / o.z, h1 = 1.0f / b.z;
+  const float sx0 = g.cx + g.fx * o.x / o.z, sy0 = g.cy - g.fy * o.y / o.z;
+  const float sx1 = g.cx + g.fx * b.x / b.z, sy1 = g.cy - g.fy * b.y / b.z;
+  float free_t = 0;
+  for (int i = 0; i < steps; ++i) {
+    const float f = (static_cast<float>(i) + jitter) / static_cast<float>(steps);
+    const float h = h0 + f * (h1 - h0);
+    MeshPoint surface;
+    // The screen point's parameter along the ray: 1/z is linear on the screen.
+    const float t = t1 * (f * h1) / h;
+    if (own.mesh.surface_at(sx0 + f * (sx1 - sx0), sy0 + f * (sy1 - sy0), &surface) &&
+        1.0f / h > own.mesh.model().slab_back(surface.z))
+      return free_t;
+    free_t = t;
+  }
+  return t_exit;
+}
+
+// Marches camera-space ray (o, d) of neighbour `n` from parameter t_from on (its origin at depth
+// `scale` in the frame it started from) through n's mesh: the hit trace sample, marked
+// kSeenFromBehind, or -1.
+std::int32_t march_in(const View& n, const Vec3f& o, const Vec3f& d, float t_from, float scale,
+                      float jitter, const GiSettings& settings) {
+  const TraceGrid& g = n.trace->grid;
+  const float near = kNearFraction * scale;
+  float t0 = t_from;
+  float t1 =
+      settings.max_distance > 0 ? static_cast<float>(settings.max_distance) : kFarFactor * scale;
+  // Only the part of the ray in front of the camera projects.
+  if (o.z + t0 * d.z < near) {
+    if (!(d.z > 0)) return -1;
+    t0 = (near - o.z) / d.z;
+  }
+  if (d.z < 0) t1 = std::min(t1, (o.z - near) / -d.z);
+  if (!(t1 > t0)) return -1;
+  const Vec3f a{o.x + t0 * d.x, o.y + t0 * d.y, o.z + t0 * d.z};
+  const Vec3f b{o.x + t1 * d.x, o.y + t1 * d.y, o.z + t1 * d.z};
+  const float sx0 = g.cx + g.fx * a.x / a.z, sy0 = g.cy - g.fy * a.y / a.z;
+  const float sx1 = g.cx + g.fx * b.x / b.z, sy1 = g.cy - g.fy * b.y / b.z;
+  ScreenSegment seg{sx0, sy0, sx1 - sx0, sy1 - sy0, 1.0f / a.z, 1.0f / b.z, 0.0f, 1.0f};
+  if (!std::isfinite(seg.dx) || !std::isfinite(seg.dy)) return -1;
+  if (!clip_to_window(&seg, static_cast<float>(g.width), static_cast<float>(g.height))) return -1;
+  // The ray's own surface, where the neighbour shows its origin, is not a hit.
+  const bool origin_seen = t0 == 0;
+  const int self_x = origin_seen ? static_cast<int>(std::floor(sx0)) : -1;
+  const int self_y = origin_seen ? static_cast<int>(std::floor(sy0)) : -1;
+  const int hit = march_segment(n.mesh, seg, settings.max_steps, jitter, self_x, self_y);
+  if (hit < 0) return -1;
+  const Vec3f p = n.vertex(hit);
+  const float in_front = (o.x - p.x) * g.normal.plane(0)[hit] +
+                         (o.y - p.y) * g.normal.plane(1)[hit] +
+                         (o.z - p.z) * g.normal.plane(2)[hit];
+  return mark_side(hit, in_front < -kBehindTolerance * p.z);
+}
+
+// Whether the centre frame sees past camera-space point `x` (its own space): x projects onto its
+// grid in front of the surface it shows there by more than the slab, or onto its background.
+bool seen_past(const View& center, const Vec3f& x) {
+  const TraceGrid& g = center.trace->grid;
+  if (!(x.z > 0)) return false;
+  const float sx = g.cx + g.fx * x.x / x.z, sy = g.cy - g.fy * x.y / x.z;
+  if (!(sx >= 0 && sy >= 0 && sx < static_cast<float>(g.width) &&
+        sy < static_cast<float>(g.height)))
+    return false;
+  MeshPoint surface;
+  if (center.mesh.surface_at(sx, sy, &surface))
+    return center.mesh.model().slab_back(x.z) < surface.z;
+  const float z =
+      g.depth.plane(0)[static_cast<std::size_t>(sy) * g.width + static_cast<std::size_t>(sx)];
+  return !std::isfinite(z);
+}
+
+// The centre's hits with the continued rays' light added and their miss shares taken out.
+class ContinuedHits final : public HitSource {
+ public:
+  ContinuedHits(const FrameTrace& t, Image miss, Image env, Image cube, Image foreign)
+      : width_(t.grid.width),
+        hits_(t.hits),
+        miss_(std::move(miss)),
+        env_(std::move(env)),
+        cube_(std::move(cube)),
+        foreign_(std::move(foreign)) {}
+  HitRow row(int by, HitScratch*) const override {
+    HitRow r;
+    r.begin = hits_.begin.data() + static_cast<std::size_t>(by) * width_;
+    r.pixel = hits_.pixel.data();
+    r.weight = hits_.weight.data();
+    return r;
+  }
+  const Image& miss() const override { return miss_; }
+  const Image& env() const override { return env_; }
+  const Image& cube() const override { return cube_; }
+  const Image* foreign() const override { return &foreign_; }
+
+ private:
+  int width_;
+  const WeightedHits& hits_;
+  Image miss_, env_, cube_, foreign_;
+};
+
+}  // namespace
+
+FrameTrace::FrameTrace(int f, const Camera& c, TraceGrid g, WeightedHits h, MissModel m,
+                       MissedRays r)
+    : frame(f),
+      camera(c),
+      grid(std::move(g)),
+      hits(std::move(h)),
+      misses(std::move(m)),
+      missed(std::move(r)) {}
+
+void FrameTrace::release_own() {
+  hits = WeightedHits();
+  missed = MissedRays();
+}
+
+std::string ContinuationReport::describe(int frame) const {
+  std::ostringstream s;
+  s << "frame " << frame << ": multiframe: " << rays << " missed rays continued in frames";
+  if (frames.empty()) s << " (none: no other camera)";
+  for (int f : frames) s << " " << f;
+  s << "; " << found << " met a surface";
+  if (moving) s << ", " << moving << " more met one the frame sees past (not taken)";
+  return s.str();
+}
+
+bool continue_rays(const std::vector<const FrameTrace*>& frames,
+                   const std::vector<const Image*>& light, int center, const GiSettings& settings,
+                   Image* out, Image* coverage, ContinuationReport* report) {
+  const FrameTrace& self = *frames[center];
+  ContinuationReport local;
+  ContinuationReport& r = report ? *report : local;
+  r = ContinuationReport();
+  const SurfaceModel model{static_cast<float>(settings.thickness)};
+  // The neighbours nearest first (the earlier of two as near), cameras unlike the centre's.
+  std::vector<int> order;
+  for (int i = 0; i < static_cast<int>(frames.size()); ++i)
+    if (i != center && frames[i]->camera.has_world_transform &&
+        !same_camera(frames[i]->camera, self.camera))
+      order.push_back(i);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    return std::abs(frames[a]->frame - self.frame) < std::abs(frames[b]->frame - self.frame);
+  });
+  if (!self.camera.has_world_transform || order.empty() || self.missed.rays.empty()) return false;
+  std::vector<View> views;
+  views.reserve(order.size() + 1);
+  views.emplace_back(self, *light[center], model);
+  std::vector<Neighbour> neighbours;
+  for (int i : order) {
+    views.emplace_back(*frames[i], *light[i], model);
+    neighbours.push_back({&views.back(), between(self.camera, frames[i]->camera),
+                          between(frames[i]->camera, self.camera)});
+    r.frames.push_back(frames[i]->frame);
+  }
+  const View& own = views.front();
+  const TraceGrid& grid = self.grid;
+  Image miss = self.hits.miss, env = self.hits.env, cube = self.hits.cube;
+  Image foreign(grid.width, grid.height, 3);
+  std::atomic<std::size_t> rays{0}, found{0}, moving{0};
+  parallel_for_rows(grid.height, [&](int by) {
+    std::size_t row_rays = 0, row_found = 0, row_moving = 0;
+    for (int bx = 0; bx < grid.width; ++bx) {
+      const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
+      const std::uint32_t first = self.missed.begin[s], end = self.missed.begin[s + 1];
+      if (first == end) continue;
+      const Vec3f o = self.missed.origin[s];
+      float sum[3] = {0, 0, 0}, env_found[3] = {0, 0, 0}, cube_found[kCubeFaces] = {};
+      float miss_found = 0;
+      for (std::uint32_t k = first; k < end; ++k) {
+        const MissedRay& ray = self.missed.rays[k];
+        const float jitter = ray_jitter(s, k - first, self.frame, settings.seed);
+        ++row_rays;
+        // The frame has seen the ray's way free up to where it leaves the frame or passes
+        // behind something; what lies beyond, the neighbours tell.
+        const float t_from =
+            first_hidden(own, o, ray.direction, leaves_view(grid, o, ray.direction, o.z), o.z,
+                         settings.max_steps, jitter);
+        if (std::isinf(t_from)) continue;  // free all the way to its vanishing point
+        for (const Neighbour& n : neighbours) {
+          const Vec3f on = n.from_center.point(o);
+          const std::int32_t hit = march_in(*n.view, on, n.from_center.direction(ray.direction),
+                                            t_from, o.z, jitter, settings);
+          if (hit < 0) continue;
+          const std::int32_t h = hit_pixel(hit);
+          // The ray's point nearest the hit vertex: where the hit is, which the centre must
+          // not see as empty space.
+          const Vec3f x = n.view->vertex(h);
+          const Vec3f dn = n.from_center.direction(ray.direction);
+          const float along = (x.x - on.x) * dn.x + (x.y - on.y) * dn.y + (x.z - on.z) * dn.z;
+          if (seen_past(own, n.to_center.point({on.x + along * dn.x, on.y + along * dn.y,
+                                                on.z + along * dn.z}))) {
+            ++row_moving;
+            continue;
+          }
+          const std::array<float, 3>& l =
+              n.view->light[2 * static_cast<std::size_t>(h) + (hit == h ? 0 : 1)];
+          for (int c = 0; c < 3; ++c) sum[c] += ray.weight * l[c];
+          self.misses.add(ray.direction, ray.weight, env_found, cube_found);
+          miss_found += ray.weight;
+          ++row_found;
+          break;
+        }
+      }
+      for (int c = 0; c < 3; ++c) {
+        foreign.plane(c)[s] = sum[c];
+        env.plane(c)[s] = std::max(env.plane(c)[s] - env_found[c], 0.0f);
+      }
+      for (int f = 0; f < kCubeFaces; ++f)
+        cube.plane(f)[s] = std::max(cube.plane(f)[s] - cube_found[f], 0.0f);
+      miss.plane(0)[s] = std::max(miss.plane(0)[s] - miss_found, 0.0f);
+    }
+    rays += row_rays;
+    found += row_found;
+    moving += row_moving;
+  });
+  r.rays = rays;
+  r.found = found;
+  r.moving = moving;
+  const ContinuedHits hits(self, std::move(miss), std::move(env), std::move(cube),
+                           std::move(foreign));
+  *out = gather_bounces(grid, hits, settings.bounces, self.misses, coverage);
+  return true;
+}
+
+}  // namespace ssgi::detail

@@ -1,0 +1,85 @@
+// Rays continued in the other frames of the shot (--multiframe): a ray that leaves frame t, or
+// passes behind everything t shows, meets nothing t can tell about, and the miss model
+// guesses what it would meet. The temporal window reads frames t-k .. t+k anyway; when the
+// camera moves they show what t does not (the floor beyond its edge, the wall behind the camera
+// a moment ago, the surface behind an object). Each missed ray of t is marched again, from the
+// same world-space point in the same world-space direction, through the depth buffer (trace
+// grid) of each neighbour in turn, nearest frame first, with that frame's camera; the first
+// surface found brings that frame's own light there: what it reflects plus its albedo x the
+// indirect light that frame gathered itself (its unseen back only the latter, as in
+// surface_model.h), so that lighting that changes over the shot stays right. Found rays leave
+// the miss model's share and join the hits, and t's bounces are gathered again.
+//
+// Geometry is taken as static: a surface a neighbour shows where frame t sees past it (the
+// point lies in front of t's own surface there by more than the slab, or t shows the background
+// there) is a moving object, or was not there at t, and is not taken. Neighbours whose camera
+// is t's own add nothing a moving object would not spoil, and are skipped. The result depends
+// on the window's frames alone, so chunked runs give the same bits as whole ones.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "directions.h"
+#include "gather.h"
+#include "misses.h"
+#include "ssgi/camera.h"
+#include "ssgi/image.h"
+#include "ssgi/settings.h"
+
+namespace ssgi::detail {
+
+// One missed ray of a trace sample: a camera-space unit direction and its share of the
+// sample's cosine-weighted hemisphere.
+struct MissedRay {
+  Vec3f direction;
+  float weight;
+};
+using PixelMisses = std::vector<MissedRay>;
+
+// A frame's missed rays, per trace sample (the slice tracer records them, slices.h).
+struct MissedRays {
+  std::vector<std::uint32_t> begin;  // per trace sample, its first ray; one more at the end
+  std::vector<MissedRay> rays;
+  std::vector<Vec3f> origin;  // per trace sample, where its rays start (camera space)
+};
+
+// The continuation's numbers for one frame (-v).
+struct ContinuationReport {
+  std::size_t rays = 0;     // missed rays with a neighbour to continue in
+  std::size_t found = 0;    // of those, the ones that met a surface there
+  std::size_t moving = 0;   // surfaces found but not taken: frame t sees past them
+  std::vector<int> frames;  // the neighbours used, nearest first
+  std::string describe(int frame) const;
+};
+
+// What a frame's trace keeps for the continuation: its trace grid (what the other frames' rays
+// meet there, and where its own start), its hits and misses (its bounces are gathered again),
+// its missed rays and its camera.
+struct FrameTrace {
+  FrameTrace(int frame, const Camera& camera, TraceGrid grid, WeightedHits hits, MissModel misses,
+             MissedRays missed);
+  int frame;
+  Camera camera;
+  TraceGrid grid;
+  WeightedHits hits;
+  MissModel misses;
+  MissedRays missed;
+  // Drops what only the frame's own continuation reads (its hits and missed rays), once it
+  // is only another frame's neighbour.
+  void release_own();
+};
+
+// Frame frames[center]'s light on its trace grid with its missed rays continued in the other
+// frames (in ascending frame order, each with its own light on its grid, before any temporal
+// filter), after `settings.bounces` gathers, into *out; with `coverage`, gather_bounces'
+// coverage, a continued ray that found a surface counting as traced. False, and nothing
+// written, when there is nothing to continue: no missed rays, no camera with a world
+// transform, or no neighbour whose camera differs from the centre's.
+bool continue_rays(const std::vector<const FrameTrace*>& frames,
+                   const std::vector<const Image*>& light, int center, const GiSettings& settings,
+                   Image* out, Image* coverage, ContinuationReport* report);
+
+}  // namespace ssgi::detail
