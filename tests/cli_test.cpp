@@ -651,6 +651,75 @@ TEST_F(Cli, TemporalWindowGivesTheSameBitsInAnyChunking) {
   }
 }
 
+TEST_F(Cli, MultiframeGivesTheSameBitsInAnyChunkingAndSaysWhatItFound) {
+  // The panning shot with its missed rays continued in the window's frames: -v counts rays
+  // continued and found per frame, the light differs from a run without, and a chunked and a
+  // frame-by-frame run give the whole run's bits (the continuation reads the window's frames
+  // alone).
+  const std::string in = testdata("pan/pan.####.exr");
+  auto run = [&](std::vector<std::string> args, const std::string& multiframe = "on") {
+    for (const std::string& a :
+         {std::string("--preset"), std::string("draft"), std::string("--multiframe"), multiframe})
+      args.push_back(a);
+    return run_ssgi(args);
+  };
+  CliResult r = run({"run", in, "-o", path("mf_whole.####.exr"), "-v"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("plan: multiframe: missed rays continued in the depth buffers of up to 2 "
+                       "frames each side"),
+            std::string::npos)
+      << r.err;
+  std::size_t found_total = 0, frames_reported = 0;
+  const std::string per_frame = "missed rays continued in frames";
+  for (std::size_t at = r.err.find(per_frame); at != std::string::npos;
+       at = r.err.find(per_frame, at + 1)) {
+    const std::size_t start = r.err.rfind("multiframe: ", at);
+    const std::string line = r.err.substr(start, r.err.find('\n', at) - start);
+    unsigned long rays = 0, found = 0;
+    ASSERT_EQ(std::sscanf(line.c_str(), "multiframe: %lu missed rays", &rays), 1) << line;
+    const std::size_t semi = line.find("; ");
+    ASSERT_NE(semi, std::string::npos) << line;
+    ASSERT_EQ(std::sscanf(line.c_str() + semi, "; %lu met a surface", &found), 1) << line;
+    EXPECT_GT(rays, 0u) << line;
+    EXPECT_LE(found, rays) << line;
+    found_total += found;
+    ++frames_reported;
+  }
+  EXPECT_EQ(frames_reported, 6u) << r.err;
+  EXPECT_GT(found_total, 0u) << r.err;
+  ASSERT_EQ(run({"run", in, "-o", path("mf_off.####.exr")}, "off").exit_code, 0);
+  ASSERT_EQ(run({"run", in, "--frames", "1-2", "-o", path("mf_chunk.####.exr")}).exit_code, 0);
+  ASSERT_EQ(run({"run", in, "--frames", "3-6", "-o", path("mf_chunk.####.exr")}).exit_code, 0);
+  ASSERT_EQ(run({"run", testdata("pan/pan.0004.exr"), "-o", path("mf_single.0004.exr")}).exit_code,
+            0);
+  bool differs = false;
+  for (int f = 1; f <= 6; ++f) {
+    char frame[16];
+    std::snprintf(frame, sizeof frame, ".%04d.exr", f);
+    const ExrImage whole = read_exr(path(std::string("mf_whole") + frame));
+    const ExrImage chunk = read_exr(path(std::string("mf_chunk") + frame));
+    for (const std::string& c : kOurChannels) {
+      const std::vector<float>& a = whole.planes.at(c);
+      EXPECT_EQ(std::memcmp(a.data(), chunk.planes.at(c).data(), a.size() * sizeof(float)), 0)
+          << "frame " << f << " " << c;
+    }
+    differs |= whole.planes.at("indirect.R") !=
+               read_exr(path(std::string("mf_off") + frame)).planes.at("indirect.R");
+  }
+  EXPECT_TRUE(differs);
+  const ExrImage whole = read_exr(path("mf_whole.0004.exr"));
+  const ExrImage single = read_exr(path("mf_single.0004.exr"));
+  for (const std::string& c : kOurChannels) EXPECT_EQ(whole.planes.at(c), single.planes.at(c)) << c;
+  // Without the window there is nothing to continue in, and the plan says so.
+  r = run({"info", in, "--temporal", "none"});
+  EXPECT_NE(r.out.find("multiframe: off (it continues rays in the temporal window's frames: "
+                       "needs --temporal window)"),
+            std::string::npos)
+      << r.out;
+  expect_usage_error(run_ssgi({"run", in, "-o", path("x.####.exr"), "--multiframe", "maybe"}),
+                     "run", "--multiframe must be off, on or on:K");
+}
+
 TEST_F(Cli, ReferenceWritesWhatRunWritesAndComparesWithIt) {
   // The lone plane sees only the environment: the reference's indirect light is exactly the
   // environment colour, and `compare` against the same file from `run` passes a loose threshold
