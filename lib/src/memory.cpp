@@ -213,6 +213,17 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
     }
   }
   const std::uint64_t tracing = planes(3, pixels) + planes(11, grid) + tracer + planes(10, grid);
+  // Multiframe: every frame of the ring keeps its trace grid (11 planes and origins); the
+  // frames not yet finished their hits too (as the tracer's) and their missed rays (8 groups of
+  // sectors a slice, 16 bytes each, and a 12-byte origin and 4-byte start per sample); while a
+  // frame is continued, each frame's view of it (its mesh, 5 bytes, and the light its hits
+  // bring, 24 a sample) and the frame's miss shares, environment and found light (13 planes).
+  std::uint64_t multiframe = 0;
+  if (plan.multiframe > 0) {
+    const std::uint64_t own = tracer + grid * (static_cast<std::uint64_t>(s.slices) * 8 * 16 + 16);
+    multiframe =
+        ring_frames * (planes(12, grid) + grid * (5 + 24)) + (waiting + 1) * own + planes(13, grid);
+  }
   // The denoiser's pyramid and guides at full resolution, and the composite's four layers
   // (indirect, gi, composite, coverage: 11 planes) beside the frame's light.
   const std::uint64_t denoise = plan.denoise || scale > 1 ? planes(24, pixels) : 0;
@@ -230,13 +241,14 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
   MemoryEstimate e;
   // The phases of a frame follow one another, but the allocator keeps what each freed, so the
   // bound adds them.
-  e.bytes = program + ring + frame + tracing + denoise + composite + writer + overlap;
+  e.bytes = program + ring + frame + tracing + multiframe + denoise + composite + writer + overlap;
   e.parts = "frames " + memory_size_text(ring + frame) + " (" + std::to_string(ring_frames) +
             " in the ring, " + std::to_string(waiting) + " waiting), tracing " +
-            memory_size_text(tracing) + ", denoise and composite " +
-            memory_size_text(denoise + composite) + ", writing " + memory_size_text(writer) + ", " +
-            std::to_string(in_flight) + " frames in flight " + memory_size_text(overlap) +
-            ", program " + memory_size_text(program);
+            memory_size_text(tracing) +
+            (multiframe ? ", multiframe " + memory_size_text(multiframe) : std::string()) +
+            ", denoise and composite " + memory_size_text(denoise + composite) + ", writing " +
+            memory_size_text(writer) + ", " + std::to_string(in_flight) + " frames in flight " +
+            memory_size_text(overlap) + ", program " + memory_size_text(program);
   return e;
 }
 
