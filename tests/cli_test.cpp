@@ -1217,6 +1217,8 @@ TEST_F(Cli, PresetsSetTheirSettingsAndGivenOptionsOverrideThem) {
   EXPECT_EQ(fin["settings"]["slices"], "3");  // given, so not the preset's 4
   EXPECT_EQ(fin["settings"]["trace-scale"], "auto (480 across)");
   EXPECT_EQ(fin["settings"]["max-steps"], "28");
+  EXPECT_EQ(fin["settings"]["multiframe"], "on");
+  EXPECT_EQ(plain["settings"].count("multiframe"), 0u);  // off: not in the provenance
   // An abbreviation getopt_long accepts is the preset too.
   const nlohmann::json abbreviated = settings_of({"--pre", "draft"});
   EXPECT_EQ(abbreviated["preset"], "draft");

@@ -538,20 +538,25 @@ TEST(Pipeline, MultiframeFindsALitFaceOnlyANeighbourShows) {
       }
     return static_cast<double>(lit) / (kSide * kSide);
   };
-  // The rows nearest the crease, where the lit face fills much of the hemisphere.
+  // The rows nearest the crease, where the lit face fills much of the hemisphere: each row's
+  // mean (a pixel's few continued rays a slice are noisy) and all of them.
   double sum_got = 0, sum_expected = 0;
-  for (int y = 0; y < 6; ++y)
-    for (int x = w / 4; x < 3 * w / 4; x += 4) {
+  for (int y = 0; y < 6; ++y) {
+    double row_got = 0, row_expected = 0;
+    for (int x = w / 4; x < 3 * w / 4; x += 2) {
       const double e = expected(point[static_cast<std::size_t>(y) * w + x]);
       ASSERT_GT(e, 0.05);
-      sum_expected += e;
-      sum_got += light.at(0, x, y);
-      EXPECT_NEAR(light.at(0, x, y), e, 0.25 * e) << x << "," << y;
+      row_expected += e;
+      row_got += light.at(0, x, y);
       EXPECT_GT(coverage.at(0, x, y), 0.99f);  // all its light was traced, in frame 2
     }
+    EXPECT_NEAR(row_got / row_expected, 1.0, 0.15) << "row " << y;
+    sum_got += row_got;
+    sum_expected += row_expected;
+  }
   std::printf("frame 1 with its rays continued in frame 2: %.4f, expected %.4f\n", sum_got,
               sum_expected);
-  EXPECT_NEAR(sum_got / sum_expected, 1.0, 0.1);
+  EXPECT_NEAR(sum_got / sum_expected, 1.0, 0.08);
 
   // A neighbour with the frame's own camera adds nothing.
   GBuffer still = b;

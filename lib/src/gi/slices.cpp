@@ -17,6 +17,8 @@ namespace ssgi::detail {
 namespace {
 
 constexpr int kSectors = 32;
+// Rays per slice that carry its missed sectors to the other frames (record_slice_misses).
+constexpr int kContinuedPerSlice = 2;
 
 constexpr float kPi = kSlicePi;
 
@@ -242,15 +244,16 @@ struct SliceTracer {
     }
   }
 
-  // The missed sectors of a slice as rays for other frames to continue (multiframe.h): per
-  // group of four neighbouring sectors, one ray for all its missed ones, through a point drawn
-  // uniformly in the slice's measure over them (one of them at random, then a point within
-  // it), so that the continued light is unbiased whatever the ray finds. The point's angle
-  // inverts the measure by interpolation in a table of it over the half-disc.
+  // The missed sectors of a slice as rays for other frames to continue (multiframe.h): the
+  // missed sectors in order, cut into kContinuedPerSlice runs of (nearly) equal count, and per
+  // run one ray for all its sectors, through a point drawn uniformly in the slice's measure over
+  // them (one of them at random, then a point within it), so that the continued light is
+  // unbiased whatever each ray finds. The point's angle inverts the measure by interpolation in
+  // a table of it over the half-disc.
   void record_slice_misses(std::uint32_t missed, const SliceMeasure& measure, const Angle& lowest,
                            float h_lo, float to_sector, float u_rot, const V3& view, const V3& t,
                            float sector_weight, std::uint64_t key, PixelMisses* record) const {
-    constexpr int kSteps = 64, kGroup = 4;
+    constexpr int kSteps = 64;
     constexpr float step = kPi / kSteps;
     static const float cos_step = std::cos(step), sin_step = std::sin(step);
     float table[kSteps + 1], cosines[kSteps + 1], sines[kSteps + 1];
@@ -263,19 +266,18 @@ struct SliceTracer {
       s = s * cos_step + c * sin_step;
       c = cn;
     }
+    int sectors[kSectors], count = 0;
+    for (int k = 0; k < kSectors; ++k)
+      if (missed >> k & 1u) sectors[count++] = k;
+    const int runs = std::min(count, kContinuedPerSlice);
     int i = 0;
-    for (int group = 0; group < kSectors / kGroup; ++group) {
-      const std::uint32_t bits = missed >> (group * kGroup) & ((1u << kGroup) - 1u);
-      if (!bits) continue;
-      const int count = sector_count(bits);
-      key = mix64(key + static_cast<std::uint64_t>(group));
-      // One of the missed sectors, then a point across it (sector k spans coordinates
-      // k -+ 1/2).
-      int pick = static_cast<int>(unit_float(key) * static_cast<float>(count));
-      int k = group * kGroup;
-      for (std::uint32_t b = bits;; b >>= 1, ++k)
-        if ((b & 1u) && pick-- == 0) break;
-      const float u = static_cast<float>(k) + unit_float(mix64(key)) - 0.5f;
+    for (int run = 0; run < runs; ++run) {
+      const int first = run * count / runs, size = (run + 1) * count / runs - first;
+      key = mix64(key + static_cast<std::uint64_t>(run));
+      const int pick =
+          std::min(static_cast<int>(unit_float(key) * static_cast<float>(size)), size - 1);
+      // Sector k spans coordinates k -+ 1/2.
+      const float u = static_cast<float>(sectors[first + pick]) + unit_float(mix64(key)) - 0.5f;
       const float m = std::clamp((u + u_rot) / to_sector + h_lo, table[0], table[kSteps]);
       while (i < kSteps - 1 && table[i + 1] < m) ++i;
       const float span = table[i + 1] - table[i];
@@ -285,7 +287,7 @@ struct SliceTracer {
       const float cd = 1.0f - 0.5f * delta * delta, sd = delta - delta * delta * delta / 6.0f;
       const float cm = cosines[i] * cd - sines[i] * sd, sm = sines[i] * cd + cosines[i] * sd;
       const V3 d = normalized(cm * view + sm * t);
-      record->push_back({{d.x, d.y, d.z}, sector_weight * static_cast<float>(count)});
+      record->push_back({{d.x, d.y, d.z}, sector_weight * static_cast<float>(size)});
     }
   }
 
