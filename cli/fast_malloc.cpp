@@ -3,7 +3,12 @@
 // are kept for reuse instead of going back to the kernel, so a frame's planes do not start as
 // fresh zeroed pages (measured at 1080p: the composite 45 -> 22 ms, page faults 1.06 M -> 0.31
 // M over the same benchmark run).
+#include "fast_malloc.h"
+
 #include <oneapi/tbb/scalable_allocator.h>
+#include <unistd.h>
+
+#include <cstdio>
 
 namespace {
 
@@ -12,4 +17,26 @@ const bool kHugeBlocksKept = [] {
   return true;
 }();
 
+// The process's resident size now, from /proc/self/statm; 0 when unknown.
+std::uint64_t resident_bytes() {
+  std::FILE* f = std::fopen("/proc/self/statm", "r");
+  if (f == nullptr) return 0;
+  unsigned long long size = 0, resident = 0;
+  const bool ok = std::fscanf(f, "%llu %llu", &size, &resident) == 2;
+  std::fclose(f);
+  return ok ? resident * static_cast<std::uint64_t>(sysconf(_SC_PAGESIZE)) : 0;
+}
+
 }  // namespace
+
+namespace ssgi_cli {
+
+void keep_allocator_within(std::uint64_t process_bytes) {
+  if (process_bytes == 0) return;
+  const std::uint64_t now = resident_bytes();
+  // A limit the process is already over still asks the allocator to keep as little as it can.
+  const std::uint64_t heap = process_bytes > now ? process_bytes - now : 1;
+  scalable_allocation_mode(TBBMALLOC_SET_SOFT_HEAP_LIMIT, static_cast<intptr_t>(heap));
+}
+
+}  // namespace ssgi_cli

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <vector>
 
+#include "fast_malloc.h"
 #include "ssgi/error.h"
 #include "ssgi/io.h"
 #include "ssgi/log.h"
@@ -400,6 +401,7 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
     ssgi::throw_usage("-v (--verbose) and -q (--quiet) contradict each other");
   if (o.help) return o;
   if (o.run.memory_limit.bytes == 0) o.run.memory_limit = ssgi::scheduler_memory_limit();
+  keep_allocator_within(o.run.memory_limit.bytes);
   // The kernels' target: --simd, else SSGI_SIMD (a bad value of either is a usage error here).
   const bool simd_given = !o.simd.empty();
   if (!simd_given && std::getenv("SSGI_SIMD") != nullptr) o.simd = std::getenv("SSGI_SIMD");

@@ -19,7 +19,11 @@
 #include <string>
 #include <vector>
 
+#include "parallel.h"
 #include "ssgi/error.h"
+#include "ssgi/pipeline.h"
+#include "ssgi/run.h"
+#include "ssgi/threads.h"
 
 namespace ssgi {
 namespace {
@@ -224,6 +228,83 @@ TEST(Memory, ARunOverItsLimitIsRefusedUpFront) {
   // A bad size is a usage error.
   const Child bad = run_cli({"run", in, "-o", out + "/d.####.exr", "--max-memory", "lots"});
   EXPECT_EQ(bad.exit_code, 2) << bad.err;
+}
+
+// Every channel of every frame `a` and `b` hold (patterns, frames `frames`), bit for bit. Read
+// without OIIO's image cache, which would give a file's earlier contents of the same name.
+void expect_same_frames(const std::string& a, const std::string& b, const std::vector<int>& frames,
+                        const std::string& what) {
+  char name[16];
+  for (int f : frames) {
+    std::snprintf(name, sizeof name, "%04d", f);
+    std::vector<std::string> channels[2];
+    std::vector<unsigned char> pixels[2];
+    for (int i = 0; i < 2; ++i) {
+      const std::string file = std::regex_replace(i ? b : a, std::regex("####"), name);
+      auto in = OIIO::ImageInput::open(file);
+      ASSERT_TRUE(in) << file << ": " << OIIO::geterror();
+      channels[i] = in->spec().channelnames;
+      pixels[i].resize(in->spec().image_bytes(/*native=*/true));
+      ASSERT_TRUE(
+          in->read_image(0, 0, 0, in->spec().nchannels, OIIO::TypeUnknown, pixels[i].data()))
+          << file << ": " << in->geterror();
+    }
+    EXPECT_EQ(channels[0], channels[1]) << what << " frame " << f;
+    EXPECT_TRUE(pixels[0] == pixels[1]) << what << " frame " << f;
+  }
+}
+
+// Under a limit that one frame in flight with the window's waiting frames kept does not fit,
+// the run reads each frame twice (its waiting frames hold no passes), with an estimate that
+// fits, and writes every channel of every frame with the same bits as a run without a limit:
+// with and without passthrough, whole or in a chunk, on 1 and 2 threads.
+TEST(Memory, ReadingTwiceFitsLessAndGivesTheSameBits) {
+  const std::string out = fresh_dir("ssgi_memory_twice");
+  RunOptions base;
+  base.input.pattern = testdata("static/static.####.exr");
+  base.write.passthrough = true;
+  const SequenceInfo seq = open_sequence(base.input);
+  const Plan plan = make_plan(seq, base.gi);
+  ASSERT_EQ(plan.temporal, TemporalMode::kWindow);
+  for (const bool passthrough : {true, false}) {
+    for (const int threads : {2, 1}) {
+      const ThreadLimit limit(threads);
+      RunOptions o = base;
+      o.write.passthrough = passthrough;
+      const int workers = detail::worker_threads();
+      PipelineMemory one;
+      one.frames_in_flight = 1;
+      const std::uint64_t kept = estimate_run_memory(seq, plan, o.gi, o.write, workers, one).bytes;
+      o.memory_limit = {kept - 1, "the test"};
+      const PipelineMemory fitted =
+          pipeline_memory_within(o.memory_limit, seq, plan, o.gi, o.write, workers);
+      EXPECT_TRUE(fitted.read_twice);
+      const std::uint64_t twice =
+          estimate_run_memory(seq, plan, o.gi, o.write, workers, fitted).bytes;
+      EXPECT_LE(twice, o.memory_limit.bytes);
+      // Less by at least the window's two waiting frames' depth, normal, albedo and direct.
+      const std::uint64_t pixels = 48 * 32;
+      EXPECT_GE(kept - estimate_run_memory(seq, plan, o.gi, o.write, workers,
+                                           {fitted.reference_hits_bytes, 1, true})
+                           .bytes,
+                2 * 10 * 4 * pixels);
+      const std::string what = std::string(passthrough ? "passthrough" : "no passthrough") + ", " +
+                               std::to_string(threads) + " threads";
+      RunOptions unlimited = o;
+      unlimited.memory_limit = {};
+      unlimited.output = out + "/kept.####.exr";
+      ASSERT_EQ(run_sequence(unlimited).failed(), 0) << what;
+      o.output = out + "/twice.####.exr";
+      const RunReport whole = run_sequence(o);
+      ASSERT_EQ(whole.failed(), 0) << what;
+      ASSERT_EQ(whole.frames.size(), seq.frames_on_disk.size());
+      expect_same_frames(unlimited.output, o.output, seq.frames_on_disk, what);
+      o.input.frames = "4-6";
+      o.output = out + "/chunk.####.exr";
+      ASSERT_EQ(run_sequence(o).failed(), 0) << what;
+      expect_same_frames(unlimited.output, o.output, {4, 5, 6}, what + ", chunk 4-6");
+    }
+  }
 }
 
 // The sample room scaled to `width` wide (nearest neighbour: depth stays depth), written once;

@@ -164,19 +164,32 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
 
   // A frame as read: the planes of the roles the plan reads (motion both ways) and the strip
   // of rows the reader decodes at a time (16 MB); with passthrough, the input's pixels too (4
-  // bytes a channel at most), which stay until the frame is written.
-  double read = 0;
-  for (int r = 0; r < kRoleCount; ++r) {
-    const Role role = static_cast<Role>(r);
-    if (!(plan.roles & role_bit(role))) continue;
-    read += role == Role::kMotion ? 4 : static_cast<double>(seq.layout.channels(role).size());
-  }
+  // bytes a channel at most), which stay until the frame is written. Read twice, the first
+  // reading has what tracing needs (no beauty, emission only when gathered, no pixels), the
+  // second what finishing needs (no motion); a frame is the larger.
+  const auto role_planes = [&](RoleMask roles) {
+    double n = 0;
+    for (int r = 0; r < kRoleCount; ++r) {
+      const Role role = static_cast<Role>(r);
+      if (!(roles & role_bit(role))) continue;
+      n += role == Role::kMotion ? 4 : static_cast<double>(seq.layout.channels(role).size());
+    }
+    return n;
+  };
+  const bool read_twice = memory.read_twice && plan.temporal == TemporalMode::kWindow;
+  const double read = role_planes(plan.roles);
   const double motion = (plan.roles & role_bit(Role::kMotion)) ? 4 : 0;
   std::uint64_t input_channels = 0;
   for (const auto& c : seq.channels.channels) input_channels += c.size();
   const std::uint64_t native = write.passthrough ? planes(input_channels, pixels) : 0;
   const std::uint64_t strip = 16 * kMiB;
-  const std::uint64_t frame = planes(read, pixels) + native + strip;
+  std::uint64_t frame = planes(read, pixels) + native + strip;
+  if (read_twice) {
+    RoleMask traced = plan.roles & ~role_bit(Role::kBeauty);
+    if (!plan.gather_emission) traced &= ~role_bit(Role::kEmission);
+    frame = std::max(planes(role_planes(traced), pixels), planes(read - motion, pixels) + native) +
+            strip;
+  }
   // The temporal ring: every frame of the window on the trace grid (its light, coverage, depth,
   // normal and motion: 12 planes), and the frames waiting for their window's later frames: their
   // passes without motion, or with passthrough their input's pixels alone (the passes are
@@ -185,7 +198,7 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
   std::uint64_t ring_frames = 1, waiting = 0;
   if (plan.temporal == TemporalMode::kWindow) {
     ring_frames = 2 * s.temporal_radius + 1;
-    waiting = s.temporal_radius;
+    waiting = read_twice ? 0 : s.temporal_radius;
   }
   if (plan.temporal == TemporalMode::kEma) ring_frames = 2;
   const std::uint64_t ring = ring_frames * frame_grid +
@@ -224,9 +237,13 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
     multiframe =
         ring_frames * (planes(12, grid) + grid * (5 + 24)) + (waiting + 1) * own + planes(13, grid);
   }
-  // The denoiser's pyramid and guides at full resolution, and the composite's four layers
-  // (indirect, gi, composite, coverage: 11 planes) beside the frame's light.
-  const std::uint64_t denoise = plan.denoise || scale > 1 ? planes(24, pixels) : 0;
+  // The denoiser's pyramid and guides at full resolution when the light enters it there; from
+  // a coarser trace grid, only the depths whole, the coarser levels (a third of a plane per
+  // plane of the half-resolution level's 6 guides and light) and the light upsampled (the
+  // last two levels' 3 planes each): 9 planes. Then the composite's four layers (indirect,
+  // gi, composite, coverage: 11 planes) beside the frame's light.
+  const std::uint64_t denoise =
+      scale > 1 ? planes(9, pixels) : (plan.denoise ? planes(24, pixels) : 0);
   const std::uint64_t composite = planes(14, pixels);
   // The writer encodes strips of rows: ours and the passed-through channels (16 MB).
   const std::uint64_t writer = strip;
@@ -243,8 +260,9 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
   // bound adds them.
   e.bytes = program + ring + frame + tracing + multiframe + denoise + composite + writer + overlap;
   e.parts = "frames " + memory_size_text(ring + frame) + " (" + std::to_string(ring_frames) +
-            " in the ring, " + std::to_string(waiting) + " waiting), tracing " +
-            memory_size_text(tracing) +
+            " in the ring, " +
+            (read_twice ? std::string("read twice") : std::to_string(waiting) + " waiting") +
+            "), tracing " + memory_size_text(tracing) +
             (multiframe ? ", multiframe " + memory_size_text(multiframe) : std::string()) +
             ", denoise and composite " + memory_size_text(denoise + composite) + ", writing " +
             memory_size_text(writer) + ", " + std::to_string(in_flight) + " frames in flight " +
@@ -259,10 +277,18 @@ PipelineMemory pipeline_memory_within(const MemoryLimit& limit, const SequenceIn
   PipelineMemory memory;
   memory.frames_in_flight = std::clamp(frames_in_flight, 1, 3);
   if (limit.bytes == 0) return memory;
-  // Less overlap before fewer kept hits: as many frames in flight as fit.
-  while (memory.frames_in_flight > 1 &&
-         estimate_run_memory(seq, plan, s, write, threads, memory).bytes > limit.bytes)
-    --memory.frames_in_flight;
+  const auto fits = [&] {
+    return estimate_run_memory(seq, plan, s, write, threads, memory).bytes <= limit.bytes;
+  };
+  // Less overlap before fewer kept hits: as many frames in flight as fit. The window's frames
+  // are read twice only when one frame in flight does not fit, and then with as many in flight
+  // as fit: decoding every frame again costs more time than overlapping less.
+  while (memory.frames_in_flight > 1 && !fits()) --memory.frames_in_flight;
+  if (!fits() && plan.temporal == TemporalMode::kWindow) {
+    memory.read_twice = true;
+    memory.frames_in_flight = std::clamp(frames_in_flight, 1, 3);
+    while (memory.frames_in_flight > 1 && !fits()) --memory.frames_in_flight;
+  }
   if (s.tracer != Tracer::kReference) return memory;
   PipelineMemory none = memory;
   none.reference_hits_bytes = 0;

@@ -106,6 +106,10 @@ PipelineMemory check_memory(const RunOptions& o, const SequenceInfo& seq) {
   if (memory.frames_in_flight < in_flight)
     log_info("memory: " + std::to_string(memory.frames_in_flight) +
              " frames in flight (reading, lighting and writing overlap less) to fit the limit");
+  if (memory.read_twice)
+    log_info(
+        "memory: each frame written is decoded twice (lit, then finished and written) so that "
+        "the frames waiting for their window's later frames hold no passes, to fit the limit");
   if (o.gi.tracer == Tracer::kReference && o.gi.bounces > 1)
     log_info("memory: the reference keeps up to " + memory_size_text(memory.reference_hits_bytes) +
              " of hits for bounces after the first; rows beyond that are traced again");
@@ -217,6 +221,7 @@ RunReport run_sequence(const RunOptions& options, const RunCallbacks& callbacks)
   job.output_path = [&](int frame) { return write_exr ? out.path_for(frame) : std::string(); };
   job.fail_fast = options.fail_fast;
   job.in_flight = memory.frames_in_flight;
+  job.read_twice = memory.read_twice;
   job.write_needs_passes = write_preview;
   job.write = [&](const GBuffer& g, FrameResult& result, const detail::DecodedInput& input) {
     if (write_preview)

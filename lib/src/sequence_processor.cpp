@@ -45,14 +45,16 @@ struct Step {
   int output = -1;       // the index (in the frames asked for) of the frame these steps serve
   bool restart = false;  // EMA: the running average starts again at `read`
   bool finish = false;   // the frame `output` is finished (or reused) after this step
+  bool again = false;    // `read` (the frame `output`) decoded again to be finished, not lit
 };
 
 // The steps of a run, mirroring what the temporal stage needs: for each frame written, the
 // frames on disk within its window that the ring does not hold yet (the ring drops the frames
-// outside the window first), or the running average's steps up to it (continued from the last
-// frame written when it came shortly before, else a pre-roll), or the frame alone.
+// outside the window first), then with `read_twice` the frame itself again; or the running
+// average's steps up to it (continued from the last frame written when it came shortly before,
+// else a pre-roll), or the frame alone.
 std::vector<Step> plan_steps(const SequenceInfo& seq, TemporalMode mode, int radius, int preroll,
-                             const std::vector<char>& reuse) {
+                             const std::vector<char>& reuse, bool read_twice) {
   const std::vector<int>& disk = seq.frames_on_disk;
   std::vector<Step> steps;
   std::set<int> ring;
@@ -70,6 +72,7 @@ std::vector<Step> plan_steps(const SequenceInfo& seq, TemporalMode mode, int rad
             it = std::abs(*it - n) > radius ? ring.erase(it) : std::next(it);
           for (int f : disk)
             if (std::abs(f - n) <= radius && ring.insert(f).second) steps.push_back({f, i});
+          if (read_twice) steps.push_back({n, i, false, false, true});
           break;
         case TemporalMode::kEma: {
           const int target =
@@ -189,13 +192,14 @@ class Processor {
         pipeline_(*job.pipeline),
         callbacks_(callbacks),
         mode_(pipeline_.plan().temporal),
-        radius_(pipeline_.settings().temporal_radius) {
+        radius_(pipeline_.settings().temporal_radius),
+        read_twice_(job.read_twice && mode_ == TemporalMode::kWindow) {
     const int preroll =
         mode_ == TemporalMode::kEma
             ? std::min(ema_preroll_frames(pipeline_.settings().ema_alpha, kEmaPrerollBound),
                        static_cast<int>(seq_.frames_on_disk.size()))
             : 0;
-    steps_ = plan_steps(seq_, mode_, radius_, preroll, job.reuse);
+    steps_ = plan_steps(seq_, mode_, radius_, preroll, job.reuse, read_twice_);
     for (int i = 0; i < static_cast<int>(seq_.frames.size()); ++i)
       if (!job.reuse[i]) output_index_[seq_.frames[i]] = i;
   }
@@ -239,9 +243,24 @@ class Processor {
     d.step = step;
     if (step.read == kNoFrame) return d;
     const auto start = Clock::now();
+    const Plan& plan = pipeline_.plan();
+    RoleMask roles = plan.roles;
+    // An input's pixels are kept for the frame's output only.
+    bool keep_pixels = job_.keep_input_pixels && still_to_write(step.read, step.output);
+    bool report = true;
+    if (step.again) {
+      // Motion only served the trace grid.
+      roles &= ~role_bit(Role::kMotion);
+    } else if (read_twice_ && still_to_write(step.read, step.output)) {
+      // Lit now, finished from its second reading: what tracing reads, without a warning
+      // (the second reading gives it).
+      roles &= ~role_bit(Role::kBeauty);
+      if (!plan.gather_emission) roles &= ~role_bit(Role::kEmission);
+      keep_pixels = report = false;
+    }
     try {
-      d.frame = read_input_frame(seq_, step.read, pipeline_.plan().roles, *job_.input,
-                                 &pipeline_.color(), job_.keep_input_pixels);
+      d.frame = read_input_frame(seq_, step.read, roles, *job_.input, &pipeline_.color(),
+                                 keep_pixels, report);
     } catch (const Error& e) {
       d.error = error_of(e);
     } catch (const std::bad_alloc&) {
@@ -260,8 +279,14 @@ class Processor {
     if (mode_ == TemporalMode::kWindow && made)
       for (auto it = ring_.begin(); it != ring_.end();)
         it = std::abs(it->first - n) > radius_ ? ring_.erase(it) : std::next(it);
-    std::optional<InputFrame> own;  // frame n, when it is read at the step that finishes it
-    if (s.read != kNoFrame) {
+    std::optional<InputFrame> own;        // frame n, when it is read at the step that finishes it
+    std::optional<FrameError> own_error;  // why frame n could not be read again
+    if (s.again) {
+      if (d.error)
+        own_error = d.error;
+      else
+        own = std::move(d.frame);
+    } else if (s.read != kNoFrame) {
       try {
         if (d.error) rethrow(*d.error);
         own = take(s, std::move(*d.frame));
@@ -284,6 +309,8 @@ class Processor {
     const auto finish_start = Clock::now();
     double convert_ms = 0;
     try {
+      // A frame that could not be lit fails for that reason first.
+      if (own_error && !failed_.count(n)) rethrow(*own_error);
       finish(n, std::move(own), &m, &convert_ms);
     } catch (const Error& e) {
       m.error = error_of(e);
@@ -326,7 +353,7 @@ class Processor {
       return std::nullopt;
     }
     Lit lit{std::move(traced), nullptr, nullptr};
-    if (still_to_write(s.read, s.output)) {
+    if (still_to_write(s.read, s.output) && !read_twice_) {
       // Kept until the frame is written: its input (headers, and with passthrough its pixels),
       // and its passes unless they can be converted again from those pixels. Motion only
       // served the trace grid, which the ring holds.
@@ -384,7 +411,13 @@ class Processor {
         if (std::abs(f - n) <= pipeline_.plan().multiframe) traced.push_back(&it->second.traced);
       }
       Lit& lit = ring_.at(n);
-      if (!lit.g) {
+      if (read_twice_) {
+        if (!own)
+          throw Error(ErrorKind::kInternal, seq_.pattern.path_for(n),
+                      "frame " + std::to_string(n) + " was not read again");
+        lit.g = std::make_shared<const GBuffer>(std::move(own->g));
+        lit.input = std::move(own->input);
+      } else if (!lit.g) {
         const auto start = Clock::now();
         RoleMask roles = pipeline_.plan().roles & ~role_bit(Role::kMotion);
         lit.g = std::make_shared<const GBuffer>(
@@ -493,6 +526,7 @@ class Processor {
   const RunCallbacks& callbacks_;
   const TemporalMode mode_;
   const int radius_;
+  const bool read_twice_;  // SequenceJob::read_twice, in the window mode
   std::vector<Step> steps_;
   std::map<int, int> output_index_;  // frames to make -> their index in seq_.frames
 
@@ -516,8 +550,8 @@ class Processor {
 
 }  // namespace
 
-int frames_waiting(TemporalMode mode, int temporal_radius) {
-  return mode == TemporalMode::kWindow ? temporal_radius : 0;
+int frames_waiting(TemporalMode mode, int temporal_radius, bool read_twice) {
+  return mode == TemporalMode::kWindow && !read_twice ? temporal_radius : 0;
 }
 
 RunReport process_sequence(const SequenceJob& job, const RunCallbacks& callbacks) {

@@ -33,6 +33,9 @@ struct SequenceJob {
   // Frames between reading and writing at once: 3 overlaps reading, computing and writing; 1
   // runs them one after the other (the least memory). PipelineMemory::frames_in_flight.
   int in_flight = 2;
+  // The window's frames waiting for their later neighbours keep only their light on the trace
+  // grid; each is decoded again to be finished. PipelineMemory::read_twice.
+  bool read_twice = false;
 };
 
 // Runs `job` as run_sequence documents it (reports in frame order, callbacks on the calling
@@ -43,7 +46,7 @@ RunReport process_sequence(const SequenceJob& job, const RunCallbacks& callbacks
 
 // The ring the temporal stage keeps is bounded by its window: how many frames' G-buffers (or,
 // with keep_input_pixels, inputs) wait at most for their window's later frames, besides the
-// frame being lit and those in flight.
-int frames_waiting(TemporalMode mode, int temporal_radius);
+// frame being lit and those in flight (none when they are read twice).
+int frames_waiting(TemporalMode mode, int temporal_radius, bool read_twice);
 
 }  // namespace ssgi::detail

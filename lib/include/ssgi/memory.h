@@ -59,7 +59,8 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& sequence, const Plan& pla
                                    int threads, const PipelineMemory& memory);
 
 // The pipeline's memory for a run under `limit`: as many frames in flight (up to
-// `frames_in_flight`, 1 to 3) as the estimate fits; the reference keeps at most 1 GiB of hits,
+// `frames_in_flight`, 1 to 3) as the estimate fits, and when one does not, the window's frames
+// read twice (PipelineMemory::read_twice) with as many; the reference keeps at most 1 GiB of hits,
 // and no more than what the limit leaves beside the rest of the run (as little as none: then
 // each bounce traces again).
 PipelineMemory pipeline_memory_within(const MemoryLimit& limit, const SequenceInfo& sequence,

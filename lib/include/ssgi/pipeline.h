@@ -55,6 +55,12 @@ struct PipelineMemory {
   // 2 by default: as fast as 3 on a 1080p shot (2 cores), 90 MB less without passthrough and
   // 430 MB less with it (tests/bench/end_to_end.sh; README, Speed and memory).
   int frames_in_flight = 2;
+  // The symmetric window finishes a frame only after its later neighbours are lit. Kept (the
+  // default), a frame waiting for them holds its full-resolution passes (with passthrough, its
+  // input's pixels); read twice, it holds only its light on the trace grid and is decoded again
+  // to be finished and written: the least memory, for a second decoding of each frame written
+  // (the same bits either way).
+  bool read_twice = false;
 };
 
 class Pipeline {

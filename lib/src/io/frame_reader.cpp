@@ -436,10 +436,11 @@ using FillChannels =
     std::function<void(int subimage, const std::vector<detail::PlaneTarget>& targets)>;
 
 // The G-buffer of `roles` from `input`'s headers, its planes filled by `fill` (from the file or
-// from the kept pixels) and converted to the library's conventions.
+// from the kept pixels) and converted to the library's conventions. With `report`, what the
+// conversion found wrong with the frame is warned about.
 GBuffer convert_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
                         const InputOptions& options, const ColorManagement* color,
-                        const detail::DecodedInput& input, const FillChannels& fill) {
+                        const detail::DecodedInput& input, const FillChannels& fill, bool report) {
   const std::string& path = input.path;
   assert(!input.parts.empty());
   const OIIO::ImageSpec& spec = input.parts.front().spec;
@@ -522,7 +523,7 @@ GBuffer convert_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
   if (roles & role_bit(Role::kDepth)) {
     const DepthCounts counts = convert_depth(g.depth, preset.depth_kind, preset.background_depth,
                                              g.camera, g.display_window, g.data_window);
-    warn_if_no_surfaces(counts, g.depth.plane_size(), preset.depth_kind, path);
+    if (report) warn_if_no_surfaces(counts, g.depth.plane_size(), preset.depth_kind, path);
   }
   if ((roles & role_bit(Role::kNormal)) && seq.normals_from_depth) {
     g.normal = normals_from_depth(g.depth, g.camera, g.display_window, g.data_window);
@@ -555,7 +556,7 @@ GBuffer convert_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
     if (color) color->input_to_working(&g.beauty);  // R, G, B; alpha is coverage
   }
   g.sanitized = non_finite;
-  if (non_finite > 0)
+  if (non_finite > 0 && report)
     log_warning(path + ": " + std::to_string(non_finite) +
                 " NaN or infinite values in normal, albedo, light or beauty channels read as 0");
   return g;
@@ -567,7 +568,7 @@ namespace detail {
 
 InputFrame read_input_frame(const SequenceInfo& seq, int frame, RoleMask roles,
                             const InputOptions& options, const ColorManagement* color,
-                            bool keep_pixels) {
+                            bool keep_pixels, bool report) {
   const std::string path = seq.pattern.path_for(frame);
   auto in = open_exr(path);
   auto input = std::make_shared<DecodedInput>(decode_input(*in, path, keep_pixels));
@@ -577,7 +578,7 @@ InputFrame read_input_frame(const SequenceInfo& seq, int frame, RoleMask roles,
     else
       read_float_channels(*in, subimage, targets, seq.data_window, path);
   };
-  GBuffer g = convert_gbuffer(seq, frame, roles, options, color, *input, fill);
+  GBuffer g = convert_gbuffer(seq, frame, roles, options, color, *input, fill, report);
   return {std::move(g), std::move(input)};
 }
 
@@ -587,14 +588,14 @@ GBuffer gbuffer_from_input(const SequenceInfo& seq, int frame, RoleMask roles,
   const FillChannels fill = [&](int subimage, const std::vector<PlaneTarget>& targets) {
     float_channels_from(input, subimage, targets, seq.data_window);
   };
-  return convert_gbuffer(seq, frame, roles, options, color, input, fill);
+  return convert_gbuffer(seq, frame, roles, options, color, input, fill, true);
 }
 
 }  // namespace detail
 
 GBuffer read_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
                      const InputOptions& options, const ColorManagement* color) {
-  return detail::read_input_frame(seq, frame, roles, options, color, false).g;
+  return detail::read_input_frame(seq, frame, roles, options, color, false, true).g;
 }
 
 }  // namespace ssgi

@@ -20,10 +20,11 @@ struct InputFrame {
 
 // read_gbuffer, keeping the parts' headers and, with `keep_pixels` (passthrough), every part's
 // pixels in their own formats; the G-buffer is then converted from those, the file being
-// decoded once.
+// decoded once. Without `report`, what is wrong with the frame (non-finite values, no
+// surfaces) is not warned about: a frame read again later is warned about then.
 InputFrame read_input_frame(const SequenceInfo& sequence, int frame, RoleMask roles,
                             const InputOptions& options, const ColorManagement* color,
-                            bool keep_pixels);
+                            bool keep_pixels, bool report = true);
 
 // The G-buffer of `roles` again from an input whose pixels were kept, without the file: the
 // same planes read_input_frame gave.
