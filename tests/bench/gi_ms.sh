@@ -22,6 +22,8 @@ configs=(
   "final|--preset final --temporal none"
   "default, 1 thread|--temporal none --threads 1"
   "default, window ±2|"
+  "default, window ±2, --multiframe on|--multiframe on"
+  "final (window ±2, multiframe on)|--preset final"
   "default, SSGI_SIMD=scalar|--temporal none|scalar"
 )
 for ((r = 0; r < rounds; ++r)); do
