@@ -210,6 +210,28 @@ Case make_case(std::uint32_t seed, bool extremes, int frames) {
   if (gi.miss == MissMode::kExtend && gi.tracer != Tracer::kScreenSpace) gi.miss = MissMode::kAuto;
   gi.env_color = {uniform(rng), uniform(rng), uniform(rng)};
   gi.seed = rng();
+  // Half the shots of several frames: a camera that turns and moves between frames (a sidecar
+  // with each frame's world transform) and --multiframe on, which continues rays through the
+  // other frames' depth buffers.
+  if (frames > 1 && rng() % 2 == 0) {
+    const std::string sidecar = c.dir + "/cameras.json";
+    std::FILE* file = std::fopen(sidecar.c_str(), "w");
+    std::fprintf(file, "{\"frames\": [");
+    const float turn = (uniform(rng) - 0.5f) * 0.2f, move = (uniform(rng) - 0.5f) * 2.0f;
+    for (int i = 0; i < frames; ++i) {
+      const double a = turn * i, co = std::cos(a), si = std::sin(a);
+      std::fprintf(file,
+                   "%s{\"frame\": %d, \"hfov_deg\": %.6f, \"worldToCamera\": [%.9f, 0, %.9f, "
+                   "0, 0, 1, 0, 0, %.9f, 0, %.9f, 0, %.9f, 0, 0, 1]}",
+                   i ? ", " : "", 1001 + i, o.input.camera.hfov_deg, co, -si, si, co,
+                   static_cast<double>(move * i));
+    }
+    std::fprintf(file, "]}\n");
+    std::fclose(file);
+    o.input.camera.sidecar = sidecar;
+    o.input.camera.hfov_deg = 0;  // the sidecar's
+    gi.multiframe = kMultiframeWindow;
+  }
   return c;
 }
 
@@ -241,7 +263,8 @@ std::string describe(const Case& c) {
   return c.dir + " (" + std::to_string(c.width) + "x" + std::to_string(c.height) + ", tracer " +
          std::to_string(static_cast<int>(c.options.gi.tracer)) + ", " +
          std::to_string(c.options.gi.bounces) + " bounces, miss " +
-         miss_mode_name(c.options.gi.miss) + ")";
+         miss_mode_name(c.options.gi.miss) +
+         (c.options.gi.multiframe ? ", moving camera, multiframe" : "") + ")";
 }
 
 // Whatever the input: ssgi's layers finite, the input's channels as they were, bit for bit.
@@ -319,9 +342,11 @@ TEST(Property, BouncesStayBetweenZeroAndTheBrightestSource) {
 }
 
 // The same bits with 1 thread as with 2, and for 3 frames run as one chunk or frame by frame
-// (the temporal window reads the same neighbours wherever a chunk starts).
+// (the temporal window, and multiframe within it, read the same neighbours wherever a chunk
+// starts); finite layers and the inputs passed through with a moving camera and multiframe too.
 TEST(Property, SameBitsForAnyThreadCountAndChunking) {
-  for (std::uint32_t seed = 200; seed < 206; ++seed) {
+  int multiframe = 0;
+  for (std::uint32_t seed = 200; seed < 212; ++seed) {
     const Case c = make_case(seed, seed % 2 == 1, 3);
     const std::vector<RandomFrame> one = run_case(c, 1, "one");
     const std::vector<RandomFrame> two = run_case(c, 2, "two");
@@ -334,7 +359,10 @@ TEST(Property, SameBitsForAnyThreadCountAndChunking) {
             << describe(c) << " frame " << i << " " << name << ": chunking changes it";
       }
     }
+    expect_finite_and_passed_through(c, two);
+    multiframe += c.options.gi.multiframe ? 1 : 0;
   }
+  EXPECT_GE(multiframe, 3);  // the seeds draw moving cameras with multiframe, not just still ones
 }
 
 }  // namespace
