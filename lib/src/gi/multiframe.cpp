@@ -236,8 +236,12 @@ void FrameTrace::release_own() {
 
 std::string ContinuationReport::describe(int frame) const {
   std::ostringstream s;
-  s << "frame " << frame << ": multiframe: " << rays << " missed rays continued in frames";
-  if (frames.empty()) s << " (none: no other camera)";
+  s << "frame " << frame << ": multiframe: ";
+  if (frames.empty())
+    return s.str() +
+           "nothing continued (no other frame of the window has a camera with a world "
+           "transform that differs from this frame's)";
+  s << rays << " missed rays continued in frames";
   for (int f : frames) s << " " << f;
   s << "; " << found << " met a surface";
   if (moving) s << ", " << moving << " more met one the frame sees past (not taken)";
@@ -261,7 +265,9 @@ bool continue_rays(const std::vector<const FrameTrace*>& frames,
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
     return std::abs(frames[a]->frame - self.frame) < std::abs(frames[b]->frame - self.frame);
   });
-  if (!self.camera.has_world_transform || order.empty() || self.missed.rays.empty()) return false;
+  if (!self.camera.has_world_transform) order.clear();
+  for (int i : order) r.frames.push_back(frames[i]->frame);
+  if (order.empty() || self.missed.rays.empty()) return false;
   std::vector<View> views;
   views.reserve(order.size() + 1);
   views.emplace_back(self, *light[center], model);
@@ -270,7 +276,6 @@ bool continue_rays(const std::vector<const FrameTrace*>& frames,
     views.emplace_back(*frames[i], *light[i], model);
     neighbours.push_back({&views.back(), between(self.camera, frames[i]->camera),
                           between(frames[i]->camera, self.camera)});
-    r.frames.push_back(frames[i]->frame);
   }
   const View& own = views.front();
   const TraceGrid& grid = self.grid;
