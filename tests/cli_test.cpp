@@ -1962,9 +1962,12 @@ TEST_F(Cli, HostileHeadersAreRefusedWithOneLine) {
   const std::array<std::int32_t, 4> huge = {0, 0, 999999, 999999};
   std::ofstream(path("huge.0001.exr"), std::ios::binary)
       << with_window("displayWindow", huge, with_window("dataWindow", huge, bytes));
-  OIIO::ImageBuf moved(testdata("sample/sample.0001.exr"));
-  moved.set_origin(5000, 5000);
-  ASSERT_TRUE(moved.write(path("moved.0001.exr"))) << moved.geterror();
+  // Through ImageInput/ImageOutput, not an ImageBuf: OIIO 2.4's image cache behind ImageBuf
+  // frees one of its own buffers wrongly when this process exits (ASan's bad-free,
+  // tests/sanitize.sh), which is OIIO's, not ssgi's.
+  ExrImage moved = read_exr(testdata("sample/sample.0001.exr"));
+  moved.spec.x = moved.spec.y = 5000;
+  write_exr(path("moved.0001.exr"), moved);
   struct Case {
     std::string file;
     int exit_code;
