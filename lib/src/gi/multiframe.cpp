@@ -294,13 +294,13 @@ bool continue_rays(const std::vector<const FrameTrace*>& frames,
       for (std::uint32_t k = first; k < end; ++k) {
         const MissedRay& ray = self.missed.rays[k];
         const float jitter = ray_jitter(s, k - first, self.frame, settings.seed);
-        ++row_rays;
         // The frame has seen the ray's way free up to where it leaves the frame or passes
         // behind something; what lies beyond, the neighbours tell.
         const float t_from =
             first_hidden(own, o, ray.direction, leaves_view(grid, o, ray.direction, o.z), o.z,
                          settings.max_steps, jitter);
         if (std::isinf(t_from)) continue;  // free all the way to its vanishing point
+        ++row_rays;
         for (const Neighbour& n : neighbours) {
           const Vec3f on = n.from_center.point(o);
           const std::int32_t hit = march_in(*n.view, on, n.from_center.direction(ray.direction),

@@ -48,7 +48,7 @@ struct MissedRays {
 
 // The continuation's numbers for one frame (-v).
 struct ContinuationReport {
-  std::size_t rays = 0;     // missed rays with a neighbour to continue in
+  std::size_t rays = 0;     // missed rays continued (not seen free to their vanishing point)
   std::size_t found = 0;    // of those, the ones that met a surface there
   std::size_t moving = 0;   // surfaces found but not taken: frame t sees past them
   std::vector<int> frames;  // the neighbours used, nearest first
