@@ -463,16 +463,17 @@ TEST(Pipeline, CoverageIsTheShareOfTheLightTheTracedRaysBrought) {
 
 // Multiframe (lib/src/gi/multiframe.h): a lit face that only a neighbouring frame shows. Frame 2
 // sees the groove head-on, its lit upper face from the crease to the frame's top; frame 1 is
-// the same groove with the camera pitched 6 degrees down (half its vertical field of view is
-// 3.75), so that it shows the dark lower face alone: the rays its pixels send to the lit face
-// leave its frame, and with black misses it gets no light at all. Continued in frame 2's depth
-// buffer they find the lit face where frame 2 shows it: frame 1's light is the share of each
-// pixel's cosine-weighted hemisphere whose rays meet the lit face at a point inside frame 2's
-// view, integrated here by brute force over directions.
+// the same groove from a camera moved by (0.4, 0, -0.5) and pitched 6 degrees down (half its
+// vertical field of view is 3.75), so that it shows the dark lower face alone: the rays its pixels
+// send to the lit face leave its frame, and with black misses it gets no light at all. Continued in
+// frame 2's depth buffer they find the lit face where frame 2 shows it: frame 1's light is the
+// share of each pixel's cosine-weighted hemisphere whose rays meet the lit face at a point inside
+// frame 2's view, integrated here by brute force over directions.
 TEST(Pipeline, MultiframeFindsALitFaceOnlyANeighbourShows) {
   GiSettings s = groove_settings(Tracer::kSlices);
   s.temporal = TemporalMode::kWindow;
   s.multiframe = kMultiframeWindow;
+  s.slices = 64;  // two continued rays a slice: many slices, so that a row's mean is converged
   Groove groove = make_groove(s);
   GBuffer& b = groove.f.g;  // camera space is world space
   b.frame = 2;
@@ -484,10 +485,13 @@ TEST(Pipeline, MultiframeFindsALitFaceOnlyANeighbourShows) {
   const Vec3d right{1, 0, 0}, up{0, std::cos(pitch), std::sin(pitch)},
       forward{0, -std::sin(pitch), std::cos(pitch)};
   const Vec3d axes[3] = {right, up, forward};
+  const Vec3d centre{0.4, 0.0, -0.5};
   for (int j = 0; j < 3; ++j) {
     a.camera.world_to_camera.m[0][j] = axes[j].x;
     a.camera.world_to_camera.m[1][j] = axes[j].y;
     a.camera.world_to_camera.m[2][j] = axes[j].z;
+    a.camera.world_to_camera.m[3][j] =
+        -(centre.x * axes[j].x + centre.y * axes[j].y + centre.z * axes[j].z);
   }
   const Camera& cam = a.camera;
   const int w = a.width(), h = a.height();
@@ -499,8 +503,9 @@ TEST(Pipeline, MultiframeFindsALitFaceOnlyANeighbourShows) {
       const Vec3d d{c[0] * right.x + c[1] * up.x + c[2] * forward.x,
                     c[0] * right.y + c[1] * up.y + c[2] * forward.y,
                     c[0] * right.z + c[1] * up.z + c[2] * forward.z};
-      const double t = 10.0 / (d.z - d.y);  // the lower face: z - y = 10, y < 0
-      const Vec3d p{t * d.x, t * d.y, t * d.z};
+      // The lower face: z - y = 10, y < 0.
+      const double t = (10.0 - centre.z + centre.y) / (d.z - d.y);
+      const Vec3d p{centre.x + t * d.x, centre.y + t * d.y, centre.z + t * d.z};
       ASSERT_LT(p.y, 0.0);
       point[static_cast<std::size_t>(y) * w + x] = p;
       a.depth.at(0, x, y) = static_cast<float>(t);  // camera 1's z of the point

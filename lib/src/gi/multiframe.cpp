@@ -41,11 +41,18 @@ Rigid between(const Camera& from, const Camera& to) {
   return out;
 }
 
+// Whether two cameras are one: their world transforms agree to 1e-6 of the larger entry (a
+// still camera's matrices written per frame may differ in their last bits).
 bool same_camera(const Camera& a, const Camera& b) {
+  double largest = 0, difference = 0;
   for (int i = 0; i < 4; ++i)
-    for (int j = 0; j < 4; ++j)
-      if (a.world_to_camera.m[i][j] != b.world_to_camera.m[i][j]) return false;
-  return true;
+    for (int j = 0; j < 4; ++j) {
+      largest = std::max(
+          {largest, std::fabs(a.world_to_camera.m[i][j]), std::fabs(b.world_to_camera.m[i][j])});
+      difference =
+          std::max(difference, std::fabs(a.world_to_camera.m[i][j] - b.world_to_camera.m[i][j]));
+    }
+  return difference <= 1e-6 * largest;
 }
 
 // A ray's march jitter in [0, 1): a hash of the trace sample, the ray and the frame (the same
@@ -57,18 +64,23 @@ float ray_jitter(std::size_t sample, std::size_t ray, int frame, std::uint32_t s
 }
 
 // One frame as the continued rays see it: its grid's mesh, its camera, and the light a hit
-// on each trace sample brings (front at 2 s, unseen back at 2 s + 1).
+// on each trace sample brings (front at 2 s, unseen back at 2 s + 1): what it reflects plus its
+// albedo x the indirect light the frame gathered itself, after all its bounces (so a continued
+// ray brings a bounce more than the frame's own last hits, but for --bounces 1, where it
+// brings what the surface reflects alone, and nothing from its back).
 struct View {
   const FrameTrace* trace;
   DepthMesh mesh;
   std::vector<std::array<float, 3>> light;
 
-  View(const FrameTrace& t, const Image& own_light, const SurfaceModel& model)
-      : trace(&t), mesh(t.grid.depth, model), light(2 * t.grid.origin.size()) {
+  // `own_light` null: the light of one bounce (what the surfaces reflect, their backs nothing).
+  View(const FrameTrace& t, const Image* own_light, const SurfaceModel& model)
+      : trace(&t), mesh(t.grid.depth, model), light(own_light ? 2 * t.grid.origin.size() : 0) {
     const TraceGrid& g = t.grid;
+    if (light.empty()) return;
     for (std::size_t s = 0; s < g.origin.size(); ++s)
       for (int c = 0; c < 3; ++c) {
-        const float back = g.origin[s] < 0 ? 0.0f : g.albedo.plane(c)[s] * own_light.plane(c)[s];
+        const float back = g.origin[s] < 0 ? 0.0f : g.albedo.plane(c)[s] * own_light->plane(c)[s];
         light[2 * s][c] = g.reflected.plane(c)[s] + back;
         light[2 * s + 1][c] = back;
       }
@@ -121,6 +133,8 @@ float first_hidden(const View& own, const Vec3f& o, const Vec3f& d, float t_exit
   const float h0 = 1.0f / o.z, h1 = 1.0f / b.z;
   const float sx0 = g.cx + g.fx * o.x / o.z, sy0 = g.cy - g.fy * o.y / o.z;
   const float sx1 = g.cx + g.fx * b.x / b.z, sy1 = g.cy - g.fy * b.y / b.z;
+  // Beyond floats (a depth near FLT_MAX): nothing to sample.
+  if (!std::isfinite(t1 + sx0 + sy0 + sx1 + sy1 + h1)) return t_exit;
   float free_t = 0;
   for (int i = 0; i < steps; ++i) {
     const float f = (static_cast<float>(i) + jitter) / static_cast<float>(steps);
@@ -239,12 +253,12 @@ std::string ContinuationReport::describe(int frame) const {
   s << "frame " << frame << ": multiframe: ";
   if (frames.empty())
     return s.str() +
-           "nothing continued (no other frame of the window has a camera with a world "
-           "transform that differs from this frame's)";
+           "nothing continued (this frame's camera, or every other frame's in its window, has "
+           "no world transform, or theirs are this frame's own)";
   s << rays << " missed rays continued in frames";
   for (int f : frames) s << " " << f;
   s << "; " << found << " met a surface";
-  if (moving) s << ", " << moving << " more met one the frame sees past (not taken)";
+  if (moving) s << ", " << moving << " more met only surfaces the frame sees past (not taken)";
   return s.str();
 }
 
@@ -270,10 +284,11 @@ bool continue_rays(const std::vector<const FrameTrace*>& frames,
   if (order.empty() || self.missed.rays.empty()) return false;
   std::vector<View> views;
   views.reserve(order.size() + 1);
-  views.emplace_back(self, *light[center], model);
+  // The centre's own view only tells what it sees: its light is not read.
+  views.emplace_back(self, nullptr, model);
   std::vector<Neighbour> neighbours;
   for (int i : order) {
-    views.emplace_back(*frames[i], *light[i], model);
+    views.emplace_back(*frames[i], settings.bounces > 1 ? light[i] : nullptr, model);
     neighbours.push_back({&views.back(), between(self.camera, frames[i]->camera),
                           between(frames[i]->camera, self.camera)});
   }
@@ -289,8 +304,7 @@ bool continue_rays(const std::vector<const FrameTrace*>& frames,
       const std::uint32_t first = self.missed.begin[s], end = self.missed.begin[s + 1];
       if (first == end) continue;
       const Vec3f o = self.missed.origin[s];
-      float sum[3] = {0, 0, 0}, env_found[3] = {0, 0, 0}, cube_found[kCubeFaces] = {};
-      float miss_found = 0;
+      float sum[3] = {0, 0, 0}, miss_found = 0;
       for (std::uint32_t k = first; k < end; ++k) {
         const MissedRay& ray = self.missed.rays[k];
         const float jitter = ray_jitter(s, k - first, self.frame, settings.seed);
@@ -301,6 +315,7 @@ bool continue_rays(const std::vector<const FrameTrace*>& frames,
                          settings.max_steps, jitter);
         if (std::isinf(t_from)) continue;  // free all the way to its vanishing point
         ++row_rays;
+        bool refused = false;
         for (const Neighbour& n : neighbours) {
           const Vec3f on = n.from_center.point(o);
           const std::int32_t hit = march_in(*n.view, on, n.from_center.direction(ray.direction),
@@ -314,25 +329,36 @@ bool continue_rays(const std::vector<const FrameTrace*>& frames,
           const float along = (x.x - on.x) * dn.x + (x.y - on.y) * dn.y + (x.z - on.z) * dn.z;
           if (seen_past(own, n.to_center.point({on.x + along * dn.x, on.y + along * dn.y,
                                                 on.z + along * dn.z}))) {
-            ++row_moving;
+            refused = true;
             continue;
           }
-          const std::array<float, 3>& l =
-              n.view->light[2 * static_cast<std::size_t>(h) + (hit == h ? 0 : 1)];
-          for (int c = 0; c < 3; ++c) sum[c] += ray.weight * l[c];
-          self.misses.add(ray.direction, ray.weight, env_found, cube_found);
+          if (n.view->light.empty()) {  // one bounce: what the surface reflects, if its front
+            if (hit == h)
+              for (int c = 0; c < 3; ++c)
+                sum[c] += ray.weight * n.view->trace->grid.reflected.plane(c)[h];
+          } else {
+            const std::array<float, 3>& l =
+                n.view->light[2 * static_cast<std::size_t>(h) + (hit == h ? 0 : 1)];
+            for (int c = 0; c < 3; ++c) sum[c] += ray.weight * l[c];
+          }
           miss_found += ray.weight;
           ++row_found;
+          refused = false;
           break;
         }
+        if (refused) ++row_moving;
       }
+      // What the found rays no longer leave to the miss model: its share of the sample's misses,
+      // taken from the environment and cube shares alike (they were summed over the slices'
+      // bins, not per ray).
+      const float missed = miss.plane(0)[s];
+      const float keep = missed > 0 ? std::clamp(1.0f - miss_found / missed, 0.0f, 1.0f) : 0.0f;
       for (int c = 0; c < 3; ++c) {
         foreign.plane(c)[s] = sum[c];
-        env.plane(c)[s] = std::max(env.plane(c)[s] - env_found[c], 0.0f);
+        env.plane(c)[s] *= keep;
       }
-      for (int f = 0; f < kCubeFaces; ++f)
-        cube.plane(f)[s] = std::max(cube.plane(f)[s] - cube_found[f], 0.0f);
-      miss.plane(0)[s] = std::max(miss.plane(0)[s] - miss_found, 0.0f);
+      for (int f = 0; f < kCubeFaces; ++f) cube.plane(f)[s] *= keep;
+      miss.plane(0)[s] = missed * keep;
     }
     rays += row_rays;
     found += row_found;
@@ -341,6 +367,7 @@ bool continue_rays(const std::vector<const FrameTrace*>& frames,
   r.rays = rays;
   r.found = found;
   r.moving = moving;
+  if (r.found == 0) return false;  // nothing changes: no need to gather again
   const ContinuedHits hits(self, std::move(miss), std::move(env), std::move(cube),
                            std::move(foreign));
   *out = gather_bounces(grid, hits, settings.bounces, self.misses, coverage);

@@ -50,7 +50,7 @@ struct MissedRays {
 struct ContinuationReport {
   std::size_t rays = 0;     // missed rays continued (not seen free to their vanishing point)
   std::size_t found = 0;    // of those, the ones that met a surface there
-  std::size_t moving = 0;   // surfaces found but not taken: frame t sees past them
+  std::size_t moving = 0;   // rays that found surfaces, none taken: frame t sees past them
   std::vector<int> frames;  // the neighbours used, nearest first
   std::string describe(int frame) const;
 };
@@ -76,8 +76,8 @@ struct FrameTrace {
 // frames (in ascending frame order, each with its own light on its grid, before any temporal
 // filter), after `settings.bounces` gathers, into *out; with `coverage`, gather_bounces'
 // coverage, a continued ray that found a surface counting as traced. False, and nothing
-// written, when there is nothing to continue: no missed rays, no camera with a world
-// transform, or no neighbour whose camera differs from the centre's.
+// written, when nothing changed: no missed rays, no camera with a world transform, no
+// neighbour whose camera differs from the centre's, or no continued ray found a surface.
 bool continue_rays(const std::vector<const FrameTrace*>& frames,
                    const std::vector<const Image*>& light, int center, const GiSettings& settings,
                    Image* out, Image* coverage, ContinuationReport* report);

@@ -246,10 +246,9 @@ struct SliceTracer {
 
   // The missed sectors of a slice as rays for other frames to continue (multiframe.h): the
   // missed sectors in order, cut into kContinuedPerSlice runs of (nearly) equal count, and per
-  // run one ray for all its sectors, through a point drawn uniformly in the slice's measure over
-  // them (one of them at random, then a point within it), so that the continued light is
-  // unbiased whatever each ray finds. The point's angle inverts the measure by interpolation in
-  // a table of it over the half-disc.
+  // run the ray of one of its sectors, drawn at random, weighing the whole run: an unbiased
+  // estimate of what the run's rays would find. The ray's angle inverts the slice's measure by
+  // interpolation in a table of it over the half-disc.
   void record_slice_misses(std::uint32_t missed, const SliceMeasure& measure, const Angle& lowest,
                            float h_lo, float to_sector, float u_rot, const V3& view, const V3& t,
                            float sector_weight, std::uint64_t key, PixelMisses* record) const {
@@ -276,8 +275,8 @@ struct SliceTracer {
       key = mix64(key + static_cast<std::uint64_t>(run));
       const int pick =
           std::min(static_cast<int>(unit_float(key) * static_cast<float>(size)), size - 1);
-      // Sector k spans coordinates k -+ 1/2.
-      const float u = static_cast<float>(sectors[first + pick]) + unit_float(mix64(key)) - 0.5f;
+      // Sector k is the ray at coordinate k (slice_kernel.h).
+      const float u = static_cast<float>(sectors[first + pick]);
       const float m = std::clamp((u + u_rot) / to_sector + h_lo, table[0], table[kSteps]);
       while (i < kSteps - 1 && table[i + 1] < m) ++i;
       const float span = table[i + 1] - table[i];
