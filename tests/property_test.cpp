@@ -211,8 +211,8 @@ Case make_case(std::uint32_t seed, bool extremes, int frames) {
   gi.env_color = {uniform(rng), uniform(rng), uniform(rng)};
   gi.seed = rng();
   // Half the shots of several frames: a camera that turns and moves between frames (a sidecar
-  // with each frame's world transform) and --multiframe on, which continues rays through the
-  // other frames' depth buffers.
+  // with each frame's world transform), the slice tracer and --multiframe on, which continues
+  // its missed rays through the other frames' depth buffers.
   if (frames > 1 && rng() % 2 == 0) {
     const std::string sidecar = c.dir + "/cameras.json";
     std::FILE* file = std::fopen(sidecar.c_str(), "w");
@@ -231,6 +231,8 @@ Case make_case(std::uint32_t seed, bool extremes, int frames) {
     o.input.camera.sidecar = sidecar;
     o.input.camera.hfov_deg = 0;  // the sidecar's
     gi.multiframe = kMultiframeWindow;
+    gi.tracer = Tracer::kSlices;  // the tracer whose misses it continues
+    if (gi.miss == MissMode::kExtend) gi.miss = MissMode::kAuto;
   }
   return c;
 }
