@@ -304,7 +304,8 @@ bool continue_rays(const std::vector<const FrameTrace*>& frames,
       const std::uint32_t first = self.missed.begin[s], end = self.missed.begin[s + 1];
       if (first == end) continue;
       const Vec3f o = self.missed.origin[s];
-      float sum[3] = {0, 0, 0}, miss_found = 0;
+      float sum[3] = {0, 0, 0}, env_found[3] = {0, 0, 0}, cube_found[kCubeFaces] = {};
+      float miss_found = 0;
       for (std::uint32_t k = first; k < end; ++k) {
         const MissedRay& ray = self.missed.rays[k];
         const float jitter = ray_jitter(s, k - first, self.frame, settings.seed);
@@ -341,6 +342,7 @@ bool continue_rays(const std::vector<const FrameTrace*>& frames,
                 n.view->light[2 * static_cast<std::size_t>(h) + (hit == h ? 0 : 1)];
             for (int c = 0; c < 3; ++c) sum[c] += ray.weight * l[c];
           }
+          self.misses.add(ray.direction, ray.weight, env_found, cube_found);
           miss_found += ray.weight;
           ++row_found;
           refused = false;
@@ -348,17 +350,18 @@ bool continue_rays(const std::vector<const FrameTrace*>& frames,
         }
         if (refused) ++row_moving;
       }
-      // What the found rays no longer leave to the miss model: its share of the sample's misses,
-      // taken from the environment and cube shares alike (they were summed over the slices'
-      // bins, not per ray).
-      const float missed = miss.plane(0)[s];
-      const float keep = missed > 0 ? std::clamp(1.0f - miss_found / missed, 0.0f, 1.0f) : 0.0f;
+      // What the found rays no longer leave to the miss model: their shares of it, as the
+      // miss model gives them for their directions. The tracer summed the shares over its
+      // bins of equal angle, not per ray, so they are not exactly what was added: held at 0.
+      // (Shrinking all the shares by the found part of the misses instead measured worse: it
+      // leaves part of the found direction's share in place, counting that light twice.)
       for (int c = 0; c < 3; ++c) {
         foreign.plane(c)[s] = sum[c];
-        env.plane(c)[s] *= keep;
+        env.plane(c)[s] = std::max(env.plane(c)[s] - env_found[c], 0.0f);
       }
-      for (int f = 0; f < kCubeFaces; ++f) cube.plane(f)[s] *= keep;
-      miss.plane(0)[s] = missed * keep;
+      for (int f = 0; f < kCubeFaces; ++f)
+        cube.plane(f)[s] = std::max(cube.plane(f)[s] - cube_found[f], 0.0f);
+      miss.plane(0)[s] = std::max(miss.plane(0)[s] - miss_found, 0.0f);
     }
     rays += row_rays;
     found += row_found;
