@@ -37,6 +37,9 @@ void keep_allocator_within(std::uint64_t process_bytes) {
   // A limit the process is already over still asks the allocator to keep as little as it can.
   const std::uint64_t heap = process_bytes > now ? process_bytes - now : 1;
   scalable_allocation_mode(TBBMALLOC_SET_SOFT_HEAP_LIMIT, static_cast<intptr_t>(heap));
+  // And no frame-sized block kept for reuse: under a limit memory counts more than the page
+  // faults of fresh blocks (1080p, --max-memory 640M: peak 548 -> 482 MB, 17.8 -> 18.0 s).
+  scalable_allocation_mode(TBBMALLOC_SET_HUGE_SIZE_THRESHOLD, static_cast<intptr_t>(1) << 40);
 }
 
 }  // namespace ssgi_cli

@@ -6,10 +6,11 @@
 
 namespace ssgi_cli {
 
-// Under a memory limit for the whole process: the allocator gives the blocks it keeps for reuse
-// back to the kernel whenever it holds more than the limit leaves beside what the process holds
-// now (its libraries), so that its cache never takes a run over the limit (at 1080p it would
-// keep each phase's planes: 600 against 440 MB measured). Nothing with glibc's allocator, which
+// Under a memory limit for the whole process: the allocator keeps no frame-sized block for
+// reuse, and gives the smaller ones it keeps back to the kernel whenever it holds more than the
+// limit leaves beside what the process holds now (its libraries), so that its cache never takes
+// a run over the limit (at 1080p it would keep each phase's planes: 600 against 440 MB
+// measured). Nothing with glibc's allocator, which
 // returns large blocks itself.
 #if SSGI_FAST_MALLOC
 void keep_allocator_within(std::uint64_t process_bytes);
