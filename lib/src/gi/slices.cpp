@@ -252,7 +252,9 @@ struct SliceTracer {
   void record_slice_misses(std::uint32_t missed, const SliceMeasure& measure, const Angle& lowest,
                            float h_lo, float to_sector, float u_rot, const V3& view, const V3& t,
                            float sector_weight, std::uint64_t key, PixelMisses* record) const {
-    constexpr int kSteps = 64;
+    // A coarse table: the measure is smooth, and the tracer runs this for every slice with a
+    // miss (64 steps took a tenth of the final preset's tracing at 1080p, perf).
+    constexpr int kSteps = 16;
     constexpr float step = kPi / kSteps;
     static const float cos_step = std::cos(step), sin_step = std::sin(step);
     float table[kSteps + 1], cosines[kSteps + 1], sines[kSteps + 1];
@@ -281,9 +283,10 @@ struct SliceTracer {
       while (i < kSteps - 1 && table[i + 1] < m) ++i;
       const float span = table[i + 1] - table[i];
       const float delta = span > 0 ? (m - table[i]) / span * step : 0.0f;
-      // cos and sin of angle i + delta by rotation (delta < pi / 64: the series are exact to
-      // float precision).
-      const float cd = 1.0f - 0.5f * delta * delta, sd = delta - delta * delta * delta / 6.0f;
+      // cos and sin of angle i + delta by rotation (delta < pi / 16: the series are exact to
+      // a few 1e-6).
+      const float d2 = delta * delta;
+      const float cd = 1.0f - 0.5f * d2 + d2 * d2 / 24.0f, sd = delta * (1.0f - d2 / 6.0f);
       const float cm = cosines[i] * cd - sines[i] * sd, sm = sines[i] * cd + cosines[i] * sd;
       const V3 d = normalized(cm * view + sm * t);
       record->push_back({{d.x, d.y, d.z}, sector_weight * static_cast<float>(size)});
