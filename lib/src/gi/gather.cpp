@@ -147,13 +147,7 @@ namespace {
 class HeldHits final : public HitSource {
  public:
   HeldHits(const TraceGrid& grid, const WeightedHits& hits) : width_(grid.width), hits_(hits) {}
-  HitRow row(int by, HitScratch*) const override {
-    HitRow r;
-    r.begin = hits_.begin.data() + static_cast<std::size_t>(by) * width_;
-    r.pixel = hits_.pixel.data();
-    r.weight = hits_.weight.data();
-    return r;
-  }
+  HitRow row(int by, HitScratch*) const override { return hits_.row(by, width_); }
   const Image& miss() const override { return hits_.miss; }
   const Image& env() const override { return hits_.env; }
   const Image& cube() const override { return hits_.cube; }

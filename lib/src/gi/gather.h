@@ -38,20 +38,6 @@ struct TraceGrid {
 // of its origin's are on its surface.
 TraceGrid make_trace_grid(const GBuffer& g, const Image& reflected, int scale, float thickness);
 
-// Weighted hits of every trace sample.
-struct WeightedHits {
-  std::vector<std::uint32_t> begin;  // per trace sample, first entry; one more at the end
-  std::vector<std::int32_t> pixel;   // trace sample whose light it brings, kSeenFromBehind marked
-  std::vector<float> weight;         // its share of the cosine-weighted hemisphere
-  Image miss;                        // 1 channel: the share that met nothing
-  Image env;                         // 3 channels: environment light of those directions
-  Image cube;                        // kCubeFaces channels: their shares of the miss model's cube
-  std::size_t entries() const { return pixel.size(); }
-};
-
-// The march's or the reference's rays as weighted hits (scale 1): each ray 1/rays.
-WeightedHits weighted_from_rays(const TraceGrid& grid, const RayHits& rays);
-
 // One row of trace samples' hits as a gather reads them: sample bx's entries are
 // [begin[bx], begin[bx + 1]) of `pixel` and of `weight`, or each weighs `uniform_weight` when
 // `weight` is null.
@@ -61,6 +47,24 @@ struct HitRow {
   const float* weight = nullptr;
   float uniform_weight = 0;
 };
+
+// Weighted hits of every trace sample.
+struct WeightedHits {
+  std::vector<std::uint32_t> begin;  // per trace sample, first entry; one more at the end
+  std::vector<std::int32_t> pixel;   // trace sample whose light it brings, kSeenFromBehind marked
+  std::vector<float> weight;         // its share of the cosine-weighted hemisphere
+  Image miss;                        // 1 channel: the share that met nothing
+  Image env;                         // 3 channels: environment light of those directions
+  Image cube;                        // kCubeFaces channels: their shares of the miss model's cube
+  std::size_t entries() const { return pixel.size(); }
+  // Row `by`'s hits, of a grid `width` samples across.
+  HitRow row(int by, int width) const {
+    return {begin.data() + static_cast<std::size_t>(by) * width, pixel.data(), weight.data()};
+  }
+};
+
+// The march's or the reference's rays as weighted hits (scale 1): each ray 1/rays.
+WeightedHits weighted_from_rays(const TraceGrid& grid, const RayHits& rays);
 
 // Storage a HitSource may fill with a row's hits and point its HitRow into.
 struct HitScratch {

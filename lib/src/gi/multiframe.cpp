@@ -214,13 +214,7 @@ class ContinuedHits final : public HitSource {
         env_(std::move(env)),
         cube_(std::move(cube)),
         foreign_(std::move(foreign)) {}
-  HitRow row(int by, HitScratch*) const override {
-    HitRow r;
-    r.begin = hits_.begin.data() + static_cast<std::size_t>(by) * width_;
-    r.pixel = hits_.pixel.data();
-    r.weight = hits_.weight.data();
-    return r;
-  }
+  HitRow row(int by, HitScratch*) const override { return hits_.row(by, width_); }
   const Image& miss() const override { return miss_; }
   const Image& env() const override { return env_; }
   const Image& cube() const override { return cube_; }
