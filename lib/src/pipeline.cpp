@@ -208,6 +208,10 @@ struct Pipeline::Impl {
   // coverage there (gather_bounces), when `keep` is (multiframe), what continuing rays needs.
   Image trace(const GBuffer& g, GBuffer* grid_out, Image* coverage,
               std::shared_ptr<detail::FrameTrace>* keep = nullptr) const;
+
+  // Traced light on the trace grid denoised there (the pyramid from the grid's level), when
+  // the plan denoises: TracedLight::light.
+  Image denoise_on_grid(const GBuffer& g, Image light) const;
 };
 
 Pipeline::Pipeline(const SequenceInfo& seq, const GiSettings& settings,
@@ -304,14 +308,18 @@ Image Pipeline::Impl::trace(const GBuffer& g, GBuffer* grid_out, Image* coverage
   return light;
 }
 
+Image Pipeline::Impl::denoise_on_grid(const GBuffer& g, Image light) const {
+  if (!plan.denoise) return light;
+  const int level = pyramid_level(plan.trace_scale);
+  return detail::upsample_and_denoise(light, level, g.depth, g.normal, settings.denoise_settings,
+                                      true, level);
+}
+
 Pipeline::TracedLight Pipeline::trace_light(const GBuffer& g) const {
   TracedLight out;
   out.light =
       impl_->trace(g, &out.grid, &out.coverage, impl_->plan.multiframe > 0 ? &out.trace : nullptr);
-  const int level = pyramid_level(impl_->plan.trace_scale);
-  if (impl_->plan.denoise)
-    out.light = detail::upsample_and_denoise(out.light, level, g.depth, g.normal,
-                                             impl_->settings.denoise_settings, true, level);
+  out.light = impl_->denoise_on_grid(g, std::move(out.light));
   return out;
 }
 
@@ -359,11 +367,7 @@ bool Pipeline::continue_light(const GBuffer& g, const std::vector<const TracedLi
   const bool continued =
       detail::continue_rays(frames, lights, c, impl_->settings, light, coverage, &report);
   log_info(report.describe(frames[c]->frame));
-  // Denoised at the grid's level as trace_light's own light is.
-  const int level = pyramid_level(impl_->plan.trace_scale);
-  if (continued && impl_->plan.denoise)
-    *light = detail::upsample_and_denoise(*light, level, g.depth, g.normal,
-                                          impl_->settings.denoise_settings, true, level);
+  if (continued) *light = impl_->denoise_on_grid(g, std::move(*light));  // as trace_light's
   return continued;
 }
 
