@@ -13,14 +13,13 @@ truth=$build/bin/truth_error
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 
-# truth_means DIR SCENE: truth_error's six columns, each averaged over the frames
+# truth_means DIR SCENE: truth_error's seven columns, each averaged over the frames
 # DIR/SCENE.*.exr, against ssgi's output $out/o.<frame>.exr.
 truth_means() {
   local f n
   for f in "$1/$2".*.exr; do
     n=${f%.exr}
     "$truth" "$f" "$out/o.${n##*.}.exr"
-  done | awk '{ for (c = 1; c <= 6; ++c) s[c] += $c; n++ }
-    END { printf "%.3f %.3f %.3f %.3f %.3f %.3f\n", s[1] / n, s[2] / n, s[3] / n, s[4] / n,
-          s[5] / n, s[6] / n }'
+  done | awk '{ for (c = 1; c <= 7; ++c) s[c] += $c; n++ }
+    END { for (c = 1; c <= 7; ++c) printf "%.3f%s", s[c] / n, c < 7 ? " " : "\n" }'
 }

@@ -6,8 +6,10 @@
 # / mean of the truth, all channels, averaged over frames; truth_error) for no GI, for the
 # oracle ambient (the truth's own mean DiffInd per channel and frame as a constant) and for
 # ssgi with the given options (its default settings when none), ssgi's level (the mean of its
-# indirect over the truth's: below 1 too dark overall, above 1 too bright), with ssgi's wall
-# time per frame, and a last row of the means over all scenes. Not run by ctest: too slow, and needs
+# indirect over the truth's: below 1 too dark overall, above 1 too bright), ssgi's error at the
+# truth's level (its indirect scaled per channel and frame to the truth's mean: the error left
+# when the overall level is right), with ssgi's wall time per frame, and a last row of the
+# means over all scenes. Not run by ctest: too slow, and needs
 # blender.
 # Usage: tests/accuracy/training.sh [BUILD_DIR] [-- extra ssgi options]
 # Environment: SSGI_TRAINING_SCENES (training scenes to measure, space-separated, " " for
@@ -33,8 +35,8 @@ done < <("${BLENDER:-blender}" -b --factory-startup --python-exit-code 1 \
 cache=
 [ ${#training[@]} -eq 0 ] || cache=$(tests/accuracy/training/render.sh "${training[@]}" | tail -n 1)
 
-printf '| scene | what it exercises | no GI | oracle ambient | ssgi | ssgi level | s/frame |\n'
-printf '|---|---|---|---|---|---|---|\n'
+printf '| scene | what it exercises | no GI | oracle ambient | ssgi | ssgi level | ssgi at the truth'"'"'s level | s/frame |\n'
+printf '|---|---|---|---|---|---|---|---|\n'
 rows=()
 for scene in room stage "${training[@]}"; do
   case $scene in
@@ -47,11 +49,11 @@ for scene in room stage "${training[@]}"; do
   "$ssgi" run "$dir/$scene.####.exr" -o "$out/o.####.exr" -q --no-passthrough "${extra[@]}"
   end=$(date +%s.%N)
   seconds=$(echo "($end - $start) / ${#frames[@]}" | bc -l | xargs printf '%.2f')
-  read -r nogi ind _ _ oracle level <<< "$(truth_means "$dir" "$scene")"
-  printf '| %s | %s | %s | %s | %s | %s | %s |\n' "$scene" "${what[$scene]:-}" "$nogi" \
-    "$oracle" "$ind" "$level" "$seconds"
-  rows+=("$nogi $oracle $ind $level $seconds")
+  read -r nogi ind _ _ oracle level leveled <<< "$(truth_means "$dir" "$scene")"
+  printf '| %s | %s | %s | %s | %s | %s | %s | %s |\n' "$scene" "${what[$scene]:-}" "$nogi" \
+    "$oracle" "$ind" "$level" "$leveled" "$seconds"
+  rows+=("$nogi $oracle $ind $level $leveled $seconds")
 done
-printf '%s\n' "${rows[@]}" | awk '{ z += $1; o += $2; i += $3; l += $4; s += $5; n++ }
-  END { printf "| **mean** | %d scenes | %.3f | %.3f | %.3f | %.3f | %.2f |\n",
-    n, z / n, o / n, i / n, l / n, s / n }'
+printf '%s\n' "${rows[@]}" | awk '{ z += $1; o += $2; i += $3; l += $4; e += $5; s += $6; n++ }
+  END { printf "| **mean** | %d scenes | %.3f | %.3f | %.3f | %.3f | %.3f | %.2f |\n",
+    n, z / n, o / n, i / n, l / n, e / n, s / n }'
