@@ -806,6 +806,56 @@ TEST(Pipeline, AWallFacingTheCameraGetsTheGroundBehindTheCamera) {
   }
 }
 
+// Behind the camera the sky is the frame's most open side's, unless both sides are enclosed.
+// Ground below; ahead a wall over the right half only, above the horizon on the left the sky
+// (an open square): straight back at 10.8 degrees up is all sky, ahead half of it, sideways
+// ahead's. With tall walls along both sides as well (a street), behind is as ahead.
+TEST(Pipeline, BehindTheCameraTheSkyIsTheMostOpenSidesUnlessBothSidesAreEnclosed) {
+  GiSettings base;
+  const float inf = std::numeric_limits<float>::infinity();
+  for (const bool street : {false, true}) {
+    SCOPED_TRACE(street ? "street" : "square");
+    Frame f = blank_scene(base, 60.0, inf);
+    GBuffer& g = f.g;
+    const Camera& cam = g.camera;
+    for (int y = 0; y < g.height(); ++y)
+      for (int x = 0; x < g.width(); ++x) {
+        const double r[3] = {(x + 0.5 - cam.cx) / cam.fx, (cam.cy - (y + 0.5)) / cam.fy, 1.0};
+        double t = inf;
+        int axis = -1;
+        float sign = 1;
+        auto meet = [&](int a, double at, float facing, auto&& inside) {
+          const double s = at / r[a];
+          if (s > 0 && s < t && inside(s)) t = s, axis = a, sign = facing;
+        };
+        meet(1, -1.6, 1.0f, [](double) { return true; });               // the ground
+        meet(2, 10.0, -1.0f, [&](double s) { return r[0] * s >= 0; });  // the wall ahead
+        if (street)
+          for (const float side : {-1.0f, 1.0f})  // walls along the view, 20 high
+            meet(0, 3.0 * side, -side, [&](double s) { return r[1] * s < 20 && s < 40; });
+        if (axis < 0) continue;
+        g.depth.at(0, x, y) = static_cast<float>(t);
+        g.normal.at(axis, x, y) = sign;
+      }
+    const detail::Environment black;
+    const detail::MissModel model(g, MissMode::kAuto, black);
+    const float up = 0.1875f, level = std::sqrt(1 - up * up);  // a bin's centre: no blending
+    const float ahead = model.sky_share({0, up, level}), back = model.sky_share({0, up, -level});
+    const float side = model.sky_share({level, up, 0});
+    std::printf("%s: sky ahead %.3f, sideways %.3f, behind %.3f; %s\n",
+                street ? "street" : "square", ahead, side, back, model.describe().c_str());
+    EXPECT_EQ(side, ahead);
+    if (street) {
+      EXPECT_GT(ahead, 0.0f);  // the gap between the side walls shows sky
+      EXPECT_LT(ahead, 0.5f);
+      EXPECT_NEAR(back, ahead, 0.01f);
+    } else {
+      EXPECT_NEAR(ahead, 0.5f, 0.05f);
+      EXPECT_NEAR(back, 1.0f, 1e-5f);
+    }
+  }
+}
+
 // --normals depth: on the ground plane and on the sample room the normals the reader derives
 // from depth are the file's wherever the pixel and its neighbours lie on one flat surface
 // (within 1 degree on every pixel of the plane; on 85% of the room's, measured 90%: its boxes and

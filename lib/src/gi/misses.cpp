@@ -103,6 +103,9 @@ MissModel::MissModel(const GBuffer& g, MissMode mode, const Environment& env)
   // surface), and how much of each cube direction the frame's surfaces near its border face.
   const int w = g.width(), h = g.height();
   const int stride = std::max(1, static_cast<int>(std::sqrt(static_cast<double>(w) * h) / 256));
+  // The display window's columns in bands, for the most open side.
+  constexpr int kBands = 8;
+  std::array<std::array<double, kElevationBins>, kBands> band_sky{}, band_count{};
   std::array<double, kElevationBins> sky{}, count{};
   double facing[kCubeFaces] = {}, border_total = 0;
   for (int y = stride / 2; y < h; y += stride)
@@ -112,8 +115,12 @@ MissModel::MissModel(const GBuffer& g, MissMode mode, const Environment& env)
       const int k =
           std::clamp(static_cast<int>((e + 1.0f) * 0.5f * kElevationBins), 0, kElevationBins - 1);
       count[k] += 1;
+      const int band =
+          std::clamp(static_cast<int>((offset_x_ + x + 0.5) / display_w_ * kBands), 0, kBands - 1);
+      band_count[band][k] += 1;
       if (!g.is_surface(x, y)) {
         sky[k] += 1;
+        band_sky[band][k] += 1;
         continue;
       }
       const double b = border_weight(offset_x_ + x + 0.5, offset_y_ + y + 0.5);
@@ -147,11 +154,23 @@ MissModel::MissModel(const GBuffer& g, MissMode mode, const Environment& env)
       sky_.fill(0.0f);
       enclosed_.fill(1.0f);
       break;
-    case MissMode::kAuto:
+    case MissMode::kAuto: {
       // Non-decreasing upwards; beyond the elevations the frame shows, the nearest it shows.
       sky_ = non_decreasing(share, count);
+      // Behind the camera: per elevation the most open band's share, fitted the same way, as
+      // far as the two sides are not both enclosed (chosen on the training set,
+      // tests/accuracy/training.sh: an open square's back is open, a street's is a street).
+      std::array<double, kElevationBins> most_open{};
+      for (int k = 0; k < kElevationBins; ++k)
+        for (int b = 0; b < kBands; ++b)
+          if (band_count[b][k] > 0)
+            most_open[k] = std::max(most_open[k], band_sky[b][k] / band_count[b][k]);
+      sky_behind_ = non_decreasing(most_open, count);
+      behind_open_ = 1.0f - std::min(enclosed_[0], enclosed_[1]);
       break;
+    }
   }
+  if (mode != MissMode::kAuto) sky_behind_ = sky_;
 }
 
 double MissModel::border_weight(double x, double y) const {
@@ -238,7 +257,14 @@ std::string MissModel::describe() const {
     std::snprintf(buf, sizeof buf, " %.2f%s", sky_[k], seen_[k] > 0 ? "" : "*");
     s += buf;
   }
-  s += " (* not in the frame); enclosed right left up down forward back:";
+  s += " (* not in the frame); behind the camera, open";
+  std::snprintf(buf, sizeof buf, " %.2f:", behind_open_);
+  s += buf;
+  for (int k = 0; k < kElevationBins; ++k) {
+    std::snprintf(buf, sizeof buf, " %.2f", sky_behind_[k]);
+    s += buf;
+  }
+  s += "; enclosed right left up down forward back:";
   for (int f = 0; f < kCubeFaces; ++f) {
     std::snprintf(buf, sizeof buf, " %.2f", enclosed_[f]);
     s += buf;

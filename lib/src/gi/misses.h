@@ -9,6 +9,10 @@
 //  - the sky's share by elevation: the fraction of the frame's pixels at each elevation that
 //    show no surface, made non-decreasing upwards (the sky is above the ground) and held at the
 //    nearest elevation the frame shows above and below those it shows;
+//  - behind the camera, the sky's share of the frame's most open side (of eight bands of the
+//    display window's columns, the largest share at each elevation), as far as the frame's two
+//    sides are not both enclosed: an open square continues open behind the camera, a street
+//    or a room continues as it is in front. Towards the sides the front's share holds;
 //  - six cube directions (the view's horizontal right, left, forward and back, up and down)
 //    and, for each, how far it is enclosed: how much the frame's surfaces near its border
 //    (border_weight) face that way. Behind the camera, which no visible surface can face, is
@@ -67,13 +71,22 @@ class MissModel {
     for (int c = 0; c < 3; ++c) env[c] += w * (1.0f - surfaces) * l[c];
   }
 
-  // The share of the sky along camera-space unit direction `d`.
+  // The share of the sky along camera-space unit direction `d`: the front's share by
+  // elevation, turning into the one behind the camera as `d` turns away from the view (in
+  // proportion to the cosine of its horizontal angle from straight back, none sideways).
   float sky_share(const Vec3f& d) const {
     const float e = d.x * up_.x + d.y * up_.y + d.z * up_.z;  // sin(elevation)
     const float f = std::min(std::max((e + 1.0f) * 0.5f * kElevationBins - 0.5f, 0.0f),
                              static_cast<float>(kElevationBins - 1));
     const int k = std::min(static_cast<int>(f), kElevationBins - 2);
-    return sky_[k] + (f - static_cast<float>(k)) * (sky_[k + 1] - sky_[k]);
+    const float t = f - static_cast<float>(k);
+    const float front = sky_[k] + t * (sky_[k + 1] - sky_[k]);
+    const float ahead = d.x * axis_[2].x + d.y * axis_[2].y + d.z * axis_[2].z;
+    if (!(ahead < 0) || !(behind_open_ > 0)) return front;
+    const float behind = sky_behind_[k] + t * (sky_behind_[k + 1] - sky_behind_[k]);
+    const float across = std::sqrt(std::max(1.0f - e * e, 0.0f));  // the horizontal length
+    const float back = across > 0 ? std::min(-ahead / across, 1.0f) : 0.0f;
+    return front + back * behind_open_ * (behind - front);
   }
 
   // The environment's light along camera-space direction `d` (world-space maps rotated).
@@ -90,6 +103,7 @@ class MissModel {
   std::string describe() const;
 
   const std::array<float, kElevationBins>& sky_by_elevation() const { return sky_; }
+  const std::array<float, kElevationBins>& sky_behind_by_elevation() const { return sky_behind_; }
 
  private:
   // How much a surface at display-window position (x, y) speaks for what lies beyond the
@@ -109,6 +123,10 @@ class MissModel {
   Vec3f up_;  // the world's up axis in camera space
   std::string up_name_;
   std::array<float, kElevationBins> sky_{};
+  // Behind the camera: the most open side's share by elevation, and how far it holds there
+  // (1 - the lesser of the right and left enclosures).
+  std::array<float, kElevationBins> sky_behind_{};
+  float behind_open_ = 0;
   std::array<int, kElevationBins> seen_{};  // trace samples per bin (for describe)
   MissMode mode_;
   bool rotate_ = false;
