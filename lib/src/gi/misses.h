@@ -103,7 +103,6 @@ class MissModel {
   std::string describe() const;
 
   const std::array<float, kElevationBins>& sky_by_elevation() const { return sky_; }
-  const std::array<float, kElevationBins>& sky_behind_by_elevation() const { return sky_behind_; }
 
  private:
   // How much a surface at display-window position (x, y) speaks for what lies beyond the
