@@ -167,6 +167,9 @@ MissModel::MissModel(const GBuffer& g, MissMode mode, const Environment& env)
             most_open[k] = std::max(most_open[k], band_sky[b][k] / band_count[b][k]);
       sky_behind_ = non_decreasing(most_open, count);
       behind_open_ = 1.0f - std::min(enclosed_[0], enclosed_[1]);
+      // An exterior as far as the frame's top shows sky (tests/accuracy/training.sh: a sunlit
+      // facade gets the ground before it; a studio without sky keeps its dark surroundings).
+      ground_ = sky_.back();
       break;
     }
   }
@@ -264,6 +267,8 @@ std::string MissModel::describe() const {
     std::snprintf(buf, sizeof buf, " %.2f", sky_behind_[k]);
     s += buf;
   }
+  std::snprintf(buf, sizeof buf, "; ground to the horizon %.2f", ground_);
+  s += buf;
   s += "; enclosed right left up down forward back:";
   for (int f = 0; f < kCubeFaces; ++f) {
     std::snprintf(buf, sizeof buf, " %.2f", enclosed_[f]);

@@ -20,7 +20,9 @@
 //  - per bounce, each direction's colour: the light of the border surfaces facing it.
 // The part of a miss along d that is not sky is split over the cube's directions by d's squared
 // components; each part meets a surface as far as its direction is enclosed, and brings that
-// direction's colour (an ambient cube, Mitchell et al. 2006). The remainder
+// direction's colour (an ambient cube, Mitchell et al. 2006). Under an open sky (the frame's top
+// shows sky: an exterior) the ground reaches the horizon: below it, the ground takes the sides'
+// parts the more the steeper d heads down, and whatever no side stops. The remainder
 // brings the environment in its direction (the --env map or colour, black by default: renderers
 // that sample the sky as a light have its light in the direct pass). `--miss env` sends every
 // miss to the environment, `frame` encloses every direction under no sky, `auto` measures.
@@ -57,13 +59,23 @@ class MissModel {
   // environment's light to env[3], the cube's shares to cube[6].
   void add(const Vec3f& d, float w, float env[3], float cube[kCubeFaces]) const {
     const float open = 1.0f - sky_share(d);  // what is not sky
+    // Below the horizon under an open sky the ground is nearer than the walls the more steeply
+    // the ray heads down: it takes that much of the walls' part.
+    const float e = d.x * up_.x + d.y * up_.y + d.z * up_.z;  // sin(elevation)
+    const float ground = e < 0 ? ground_ * std::min(-e * kGroundSteepness, 1.0f) : 0.0f;
     // Each cube direction takes its squared component of the ray, as far as it is enclosed.
     float surfaces = 0;
     for (int i = 0; i < 3; ++i) {
       const float a = d.x * axis_[i].x + d.y * axis_[i].y + d.z * axis_[i].z;
       const int f = 2 * i + (a >= 0 ? 0 : 1);
-      const float share = open * a * a * enclosed_[f];
+      const float share = open * a * a * enclosed_[f] * (i == 1 ? 1.0f : 1.0f - ground);
       cube[f] += w * share;
+      surfaces += share;
+    }
+    // What no side stops below the horizon meets the ground, as far as the sky is open.
+    if (e < 0 && ground_ > 0 && surfaces < open) {
+      const float share = ground_ * (open - surfaces) * enclosed_[3];
+      cube[3] += w * share;
       surfaces += share;
     }
     if (env_.is_black() || !(surfaces < 1.0f)) return;
@@ -110,6 +122,10 @@ class MissModel {
   // nearest edge.
   double border_weight(double x, double y) const;
   static constexpr double kBorder = 0.1;
+  // Below the horizon under an open sky, the ground takes all of a miss's part that would
+  // meet a wall from sin(depression) 1 / kGroundSteepness (11.5 degrees) down: walls about
+  // five camera heights away, as in the training set's exteriors.
+  static constexpr float kGroundSteepness = 5.0f;
 
   const Environment& env_;
   double display_w_, display_h_;  // the display window's size
@@ -126,6 +142,9 @@ class MissModel {
   // (1 - the lesser of the right and left enclosures).
   std::array<float, kElevationBins> sky_behind_{};
   float behind_open_ = 0;
+  // How far the frame is an exterior, whose ground reaches the horizon under every miss below
+  // it: the sky's share at the frame's highest elevation (0 indoors and in a studio).
+  float ground_ = 0;
   std::array<int, kElevationBins> seen_{};  // trace samples per bin (for describe)
   MissMode mode_;
   bool rotate_ = false;
