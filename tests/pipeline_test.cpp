@@ -826,6 +826,40 @@ TEST(Pipeline, AWallFacingTheCameraGetsTheGroundBehindTheCamera) {
   }
 }
 
+// A room: the frame shows a floor and a ceiling along its border and a far wall between them,
+// no side wall and no sky. The border says nothing faces right or left, but a room has walls:
+// every direction is enclosed. Without the ceiling (a floor before a backdrop: a studio) the
+// sides stay open.
+TEST(Pipeline, AFloorAndACeilingWithoutSkyCloseTheRoomsSides) {
+  GiSettings base;
+  for (const bool ceiling : {true, false}) {
+    SCOPED_TRACE(ceiling ? "room" : "studio");
+    Frame f = blank_scene(base, 60.0, std::numeric_limits<float>::infinity());
+    GBuffer& g = f.g;
+    const Camera& cam = g.camera;
+    for (int y = 0; y < g.height(); ++y)
+      for (int x = 0; x < g.width(); ++x) {
+        const double ry = (cam.cy - (y + 0.5)) / cam.fy;
+        const double far = 20, floor_y = -1.5, ceiling_y = 1.5;
+        float depth = static_cast<float>(far);
+        int axis = 2;
+        float sign = -1;
+        if (ry < 0 && floor_y / ry < far) {
+          depth = static_cast<float>(floor_y / ry), axis = 1, sign = 1;
+        } else if (ceiling && ry > 0 && ceiling_y / ry < far) {
+          depth = static_cast<float>(ceiling_y / ry), axis = 1, sign = -1;
+        }
+        g.depth.at(0, x, y) = depth;
+        g.normal.at(axis, x, y) = sign;
+      }
+    const detail::Environment black;
+    const std::string decided = detail::MissModel(g, MissMode::kAuto, black).describe();
+    const char* closed = "enclosed right left up down forward back: 1.00 1.00 1.00 1.00 1.00 1.00";
+    const char* studio = "enclosed right left up down forward back: 0.00 0.00 0.00 1.00 1.00 0.00";
+    EXPECT_NE(decided.find(ceiling ? closed : studio), std::string::npos) << decided;
+  }
+}
+
 // Behind the camera the sky is the frame's most open side's, unless both sides are enclosed.
 // Ground below; ahead a wall over the right half only, above the horizon on the left the sky
 // (an open square): straight back at 10.8 degrees up is all sky, ahead half of it, sideways

@@ -157,6 +157,16 @@ MissModel::MissModel(const GBuffer& g, MissMode mode, const Environment& env)
     case MissMode::kAuto: {
       // Non-decreasing upwards; beyond the elevations the frame shows, the nearest it shows.
       sky_ = non_decreasing(share, count);
+      // An exterior as far as the frame's top shows sky (tests/accuracy/training.sh: a sunlit
+      // facade gets the ground before it; a studio without sky keeps its dark surroundings).
+      ground_ = sky_.back();
+      // A room: a frame whose border shows a ceiling and a floor, under no sky, has walls on
+      // every side, though its border may show few surfaces facing some of them (an office's
+      // far wall in the middle of the frame, furniture along the sides).
+      {
+        const float room = std::min(enclosed_[2], enclosed_[3]) * (1.0f - ground_);
+        for (const int f : {0, 1, 4, 5}) enclosed_[f] = std::max(enclosed_[f], room);
+      }
       // Behind the camera: per elevation the most open band's share, fitted the same way, as
       // far as the two sides are not both enclosed (chosen on the training set,
       // tests/accuracy/training.sh: an open square's back is open, a street's is a street).
@@ -167,9 +177,6 @@ MissModel::MissModel(const GBuffer& g, MissMode mode, const Environment& env)
             most_open[k] = std::max(most_open[k], band_sky[b][k] / band_count[b][k]);
       sky_behind_ = non_decreasing(most_open, count);
       behind_open_ = 1.0f - std::min(enclosed_[0], enclosed_[1]);
-      // An exterior as far as the frame's top shows sky (tests/accuracy/training.sh: a sunlit
-      // facade gets the ground before it; a studio without sky keeps its dark surroundings).
-      ground_ = sky_.back();
       break;
     }
   }
