@@ -173,8 +173,8 @@ void BM_MarchSideKernel(benchmark::State& state) {
          0,
          0.1f};
   }
-  const ssgi::detail::SliceFrame f{0.1f, 0.2f, 3.0f,  -0.03f, -0.07f, -0.997f, 0.99f, 0.0f, -0.03f,
-                                   1.1f, 0.9f, 0.43f, -1.12f, 2.02f,  -0.4f,   25.0f, 0.3f};
+  const ssgi::detail::SliceFrame f{0.1f,   0.2f, 3.0f,  -0.03f, -0.07f, -0.997f, 0.99f, 0.0f,
+                                   -0.03f, 0.9f, 0.43f, -1.12f, 2.02f,  -0.4f,   25.0f, 0.3f};
   ssgi::detail::SideSamples out;
   for (auto _ : state) {
     for (const auto& m : sides) {

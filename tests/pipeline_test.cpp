@@ -20,6 +20,7 @@
 #include "misses.h"
 #include "ssgi/color.h"
 #include "ssgi/io.h"
+#include "surface_model.h"
 
 namespace ssgi {
 namespace {
@@ -823,6 +824,91 @@ TEST(Pipeline, AWallFacingTheCameraGetsTheGroundBehindTheCamera) {
       }
       EXPECT_EQ(wall_light(tracer, MissMode::kAuto, 0.0f), 0.0);
     }
+  }
+}
+
+// Thin features get thin slabs (surface_model.h): a wall 10 away with poles 0.5 in front of it,
+// one and two pixels wide. The wall's slab is --thickness; a pole's is kDepthPerWidth x its width
+// over the focal length, rounded up to a step of thickness / 64; a floor seen at a slant is a wide
+// surface, so its slab is the whole thickness too.
+TEST(Pipeline, ThinFeaturesGetThinSlabs) {
+  GiSettings base;
+  Frame f = blank_scene(base, 60.0, 10.0f);
+  GBuffer& g = f.g;
+  const int w = g.width(), h = g.height();
+  const Camera& cam = g.camera;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const double ry = (cam.cy - (y + 0.5)) / cam.fy;
+      if (ry < 0 && -1.6 / ry < 10) {  // the floor
+        g.depth.at(0, x, y) = static_cast<float>(-1.6 / ry);
+        g.normal.at(1, x, y) = 1.0f;
+      } else {
+        if (x == 20 || x == 40 || x == 41) g.depth.at(0, x, y) = 9.5f;  // the poles
+        g.normal.at(2, x, y) = -1.0f;
+      }
+    }
+  const detail::SurfaceModel model{0.1f};
+  const Image t = detail::feature_thickness(g, model);
+  const float step = model.thickness / detail::kThicknessSteps;
+  auto thin = [&](int pixels) {
+    return step * std::ceil(detail::kDepthPerWidth * pixels / static_cast<float>(cam.fx) / step);
+  };
+  const int wall_row = 5, floor_row = h - 3;
+  EXPECT_FLOAT_EQ(t.at(0, 20, wall_row), thin(1));
+  EXPECT_FLOAT_EQ(t.at(0, 40, wall_row), thin(2));
+  EXPECT_FLOAT_EQ(t.at(0, 41, wall_row), thin(2));
+  EXPECT_LT(thin(1), 0.4f * model.thickness);  // 0.0375: a pole of 0.18 at 9.5 is 0.36 deep
+  for (const int x : {0, 10, 19, 21, 30, 42, w - 1}) {
+    EXPECT_EQ(t.at(0, x, wall_row), model.thickness) << x;
+    EXPECT_EQ(t.at(0, x, floor_row), model.thickness) << x;
+  }
+}
+
+// Light passes behind a thin pole: a wall facing the camera over a lit ground (as above), with
+// a pole half a unit in front of it, one pixel wide (0.18 at depth 9.5) and unlit. Two pixels
+// beside the pole the wall gets the light it gets without the pole (the pole hides too little
+// of the ground for these rays to meet it). Were the pole's slab a tenth of its depth (0.95,
+// reaching past the wall), it would wall the wall off: 0.81 of the light there with both
+// tracers, as before thin features.
+TEST(Pipeline, LightPassesBehindAThinPole) {
+  GiSettings base = converged_settings();
+  base.bounces = 1;
+  const double ground_y = -1.6, wall_z = 10;
+  auto wall_light = [&](Tracer tracer, bool pole) {
+    Frame f = blank_scene(base, 60.0, std::numeric_limits<float>::infinity());
+    GBuffer& g = f.g;
+    const int w = g.width(), h = g.height();
+    const Camera& cam = g.camera;
+    std::vector<std::size_t> beside;
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const double ry = (cam.cy - (y + 0.5)) / cam.fy;
+        if (ry < 0 && ground_y / ry < wall_z) {  // the ground, lit
+          g.depth.at(0, x, y) = static_cast<float>(ground_y / ry);
+          g.normal.at(1, x, y) = 1.0f;
+          for (int c = 0; c < 3; ++c) g.direct.at(c, x, y) = 1.0f;
+        } else if (ry * wall_z < 1.0) {  // the wall and the pole, unlit
+          g.depth.at(0, x, y) = pole && x == w / 2 ? 9.5f : static_cast<float>(wall_z);
+          g.normal.at(2, x, y) = -1.0f;
+          if ((x == w / 2 - 2 || x == w / 2 + 2) && ry * wall_z > ground_y + 0.5)
+            beside.push_back(static_cast<std::size_t>(y) * w + x);
+        }
+      }
+    GiSettings s = base;
+    s.tracer = tracer;
+    const Image indirect = Pipeline(f.seq, s).indirect_light(g);
+    double mean = 0;
+    for (std::size_t p : beside) mean += indirect.plane(0)[p] / beside.size();
+    return mean;
+  };
+  for (Tracer tracer : kTracers) {
+    SCOPED_TRACE(tracer_name(tracer));
+    const double open = wall_light(tracer, false), behind_pole = wall_light(tracer, true);
+    std::printf("%s: beside the pole the wall gets %.4f, without the pole %.4f (%.2f)\n",
+                tracer_name(tracer), behind_pole, open, behind_pole / open);
+    EXPECT_GT(open, 0.1);
+    EXPECT_NEAR(behind_pole, open, 0.03 * open);
   }
 }
 

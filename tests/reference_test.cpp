@@ -130,7 +130,7 @@ int dense_walk(const GBuffer& g, const detail::DepthMesh& mesh, const detail::Ve
     detail::MeshPoint surface;
     if (!mesh.surface_at(sx, sy, &surface)) continue;
     const double z = 1.0 / (h0 + (h1 - h0) * f);
-    if (z >= surface.z && z <= mesh.model().slab_back(surface.z)) return surface.pixel;
+    if (z >= surface.z && z <= surface.back_z) return surface.pixel;
   }
   return -1;
 }
@@ -144,7 +144,8 @@ TEST(Reference, AgreesWithADenseWalkThroughTheModel) {
   const GBuffer& g = f.g;
   const detail::Environment env;
   const detail::RayHits hits = detail::trace_reference(g, s, detail::MissModel(g, s.miss, env));
-  const detail::DepthMesh mesh(g.depth, detail::SurfaceModel{static_cast<float>(s.thickness)});
+  const detail::SurfaceModel model{static_cast<float>(s.thickness)};
+  const detail::DepthMesh mesh(g.depth, model, detail::feature_thickness(g, model));
   int rays = 0, differ = 0;
   for (int p = 0; p < g.width() * g.height(); p += 7) {
     const int x = p % g.width(), y = p / g.width();

@@ -364,7 +364,6 @@ SliceFrame random_frame(std::mt19937& rng, float oz) {
           tx,
           ty,
           tz,
-          1.1f,
           cg,
           sg,
           lo,
@@ -375,7 +374,8 @@ SliceFrame random_frame(std::mt19937& rng, float oz) {
 }
 
 // A mesh of w x h texels: a tilted plane in front of the slices' origins with steps, holes
-// (background, no triangles), random triangle flags and random normals.
+// (background, no triangles), random triangle flags, normals and slab thicknesses (a third at
+// the model's, the rest thin features).
 std::vector<MeshTexel> random_mesh(std::mt19937& rng, int w, int h) {
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
   std::uniform_int_distribution<int> pick(0, 15), normal(-127, 127);
@@ -391,6 +391,9 @@ std::vector<MeshTexel> random_mesh(std::mt19937& rng, int w, int h) {
       t.nz = static_cast<std::int8_t>(-std::abs(normal(rng)));
       t.triangles = t.inverse_depth == 0 ? 0 : static_cast<std::uint8_t>(pick(rng) % 4);
       if (pick(rng) < 10) t.triangles = kUpperTriangle | kLowerTriangle;
+      if (pick(rng) > 4)
+        t.triangles |= static_cast<std::uint8_t>(thickness_code(u(rng) * u(rng) * 0.1f, 0.1f)
+                                                 << kThicknessShift);
     }
   return texels;
 }
@@ -500,9 +503,8 @@ TEST(Simd, SectorBitsAreTheSectorsInsideTheInterval) {
 TEST(Simd, SectorCoordinatesSpanTheHemisphere) {
   // The coordinates span the hemisphere (here around the view vector): towards the camera is
   // its middle (half the measure), along t and against it its edges, and beyond them clamps.
-  const SliceFrame f{
-      0,     0,     3,    0, 0, -1, 1, 0, 0, 1.1f, 1, 0, -0.5f * kSlicePi, 0.5f * kSlicePi,
-      -0.5f, 32.0f, 0.25f};
+  const SliceFrame f{0,     0,     3,    0, 0, -1, 1, 0, 0, 1, 0, -0.5f * kSlicePi, 0.5f * kSlicePi,
+                     -0.5f, 32.0f, 0.25f};
   EXPECT_NEAR(sector_coordinate(f, 0, 0, -1), 16.0f - 0.25f, 1e-4);  // towards the camera
   EXPECT_NEAR(sector_coordinate(f, 1, 0, 0), 32.0f - 0.25f, 1e-4);   // along t
   EXPECT_NEAR(sector_coordinate(f, -1, 0, 0), 0.0f - 0.25f, 1e-4);   // against t

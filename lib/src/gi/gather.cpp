@@ -111,6 +111,8 @@ TraceGrid make_trace_grid(const GBuffer& g, const Image& reflected, int scale, f
       }
     }
   });
+  grid.thickness = feature_thickness(grid.depth, grid.normal, grid.fx, grid.fy, grid.cx, grid.cy,
+                                     SurfaceModel{thickness});
   return grid;
 }
 

@@ -29,6 +29,8 @@ struct TraceGrid {
   // reflected light and albedo (clamped to [0, 1]) of the block's pixels on its surface. At
   // scale 1 these are the frame's own values, so the mesh is the frame's (surface_model.h).
   Image depth, normal, reflected, albedo;
+  // Per trace sample, its slab's thickness (surface_model.h: feature_thickness).
+  Image thickness;
   // The camera in trace-sample units: the data window's pixel coordinates divided by scale.
   float fx = 1, fy = 1, cx = 0, cy = 0;
 };

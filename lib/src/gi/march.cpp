@@ -17,11 +17,11 @@ namespace {
 // is longer than the step budget.
 int march_sampled(const DepthMesh& mesh, const ScreenSegment& s, int steps, float jitter,
                   int self_x, int self_y) {
-  const SurfaceModel& model = mesh.model();
   const float df = (s.f_hi - s.f_lo) / steps;
   const float inf = std::numeric_limits<float>::infinity();
   bool prev_valid = false, prev_in_front = false;
   float prev_z = 0.0f;
+  int prev_pixel = 0;
   for (int i = 0; i < steps; ++i) {
     const float f = s.f_lo + df * (i + jitter);
     const float sx = s.sx0 + s.dx * f, sy = s.sy0 + s.dy * f;
@@ -35,12 +35,14 @@ int march_sampled(const DepthMesh& mesh, const ScreenSegment& s, int steps, floa
     const float hr = s.h0 + (s.h1 - s.h0) * f;
     const float z_ray = hr > 0 ? 1.0f / hr : inf;
     const bool behind_front = z_ray >= surface.z;
-    if (behind_front && (z_ray <= model.slab_back(surface.z) ||
-                         (prev_valid && prev_in_front && model.connected(prev_z, surface.z))))
+    if (behind_front &&
+        (z_ray <= surface.back_z || (prev_valid && prev_in_front &&
+                                     mesh.connected(prev_z, prev_pixel, surface.z, surface.pixel))))
       return surface.pixel;
     prev_valid = true;
     prev_in_front = !behind_front;
     prev_z = surface.z;
+    prev_pixel = surface.pixel;
   }
   return -1;
 }
@@ -76,7 +78,6 @@ void clip_to_box(const ScreenSegment& s, float x0, float y0, float x1, float y1,
 // outside the ray's own pixel is the hit. This is the surface model itself, which the Embree
 // reference traces too.
 int walk_exact(const DepthMesh& mesh, const ScreenSegment& s, int self_x, int self_y) {
-  const SurfaceModel& model = mesh.model();
   float own_lo = 2.0f, own_hi = 2.0f;  // where the segment is inside its own pixel
   clip_to_box(s, self_x, self_y, self_x + 1.0f, self_y + 1.0f, &own_lo, &own_hi);
   const float past_own = kPastEdgePx / std::max(std::fabs(s.dx), std::fabs(s.dy));
@@ -90,7 +91,6 @@ int walk_exact(const DepthMesh& mesh, const ScreenSegment& s, int self_x, int se
   float next_v = s.dy != 0 ? ((step_j > 0 ? j + 1 : j) - v0) / s.dy : inf;
   const float delta_u = s.dx != 0 ? 1.0f / std::fabs(s.dx) : inf;
   const float delta_v = s.dy != 0 ? 1.0f / std::fabs(s.dy) : inf;
-  const float inv_k = 1.0f / (1.0f + model.thickness);
 
   // The first point of [fa, fb] inside the slab of the triangle of quad (i, j) it lies in.
   auto piece = [&](float fa, float fb) {
@@ -100,6 +100,8 @@ int walk_exact(const DepthMesh& mesh, const ScreenSegment& s, int self_x, int se
     if (!mesh.has_triangle(i, j, upper)) return -1;
     const float surf_a = mesh.inverse_depth_at(i, j, upper, u0 + s.dx * fa - i, v0 + s.dy * fa - j);
     const float surf_b = mesh.inverse_depth_at(i, j, upper, u0 + s.dx * fb - i, v0 + s.dy * fb - j);
+    const float back_a = mesh.inverse_back_at(i, j, upper, u0 + s.dx * fa - i, v0 + s.dy * fa - j);
+    const float back_b = mesh.inverse_back_at(i, j, upper, u0 + s.dx * fb - i, v0 + s.dy * fb - j);
     const float ray_a = s.h0 + (s.h1 - s.h0) * fa, ray_b = s.h0 + (s.h1 - s.h0) * fb;
     float lo = fa, hi = fb;
     // Keeps the part of [lo, hi] where the affine r (ra at fa, rb at fb) is >= 0.
@@ -113,9 +115,9 @@ int walk_exact(const DepthMesh& mesh, const ScreenSegment& s, int self_x, int se
         lo = std::max(lo, fr);
       return lo <= hi;
     };
-    // Behind the front (1/z_ray <= 1/z_surface), before the back (1/z_ray >= k / z_surface).
+    // Behind the front (1/z_ray <= 1/z_surface), before the back (1/z_ray >= 1/z_back).
     if (!keep_non_negative(surf_a - ray_a, surf_b - ray_b) ||
-        !keep_non_negative(ray_a - inv_k * surf_a, ray_b - inv_k * surf_b))
+        !keep_non_negative(ray_a - back_a, ray_b - back_b))
       return -1;
     float f = lo;
     if (f >= own_lo && f <= own_hi) {
@@ -197,7 +199,7 @@ struct Tracer {
       : g(gb),
         settings(s),
         model{static_cast<float>(s.thickness)},
-        mesh(gb.depth, model),
+        mesh(gb.depth, model, feature_thickness(gb, model)),
         width(gb.width()),
         height(gb.height()),
         offset_x(gb.data_window.x0 - gb.display_window.x0),

@@ -75,7 +75,9 @@ struct View {
 
   // `own_light` null: the light of one bounce (what the surfaces reflect, their backs nothing).
   View(const FrameTrace& t, const Image* own_light, const SurfaceModel& model)
-      : trace(&t), mesh(t.grid.depth, model), light(own_light ? 2 * t.grid.origin.size() : 0) {
+      : trace(&t),
+        mesh(t.grid.depth, model, t.grid.thickness),
+        light(own_light ? 2 * t.grid.origin.size() : 0) {
     const TraceGrid& g = t.grid;
     if (light.empty()) return;
     for (std::size_t s = 0; s < g.origin.size(); ++s)
@@ -143,7 +145,7 @@ float first_hidden(const View& own, const Vec3f& o, const Vec3f& d, float t_exit
     // The screen point's parameter along the ray: 1/z is linear on the screen.
     const float t = t1 * (f * h1) / h;
     if (own.mesh.surface_at(sx0 + f * (sx1 - sx0), sy0 + f * (sy1 - sy0), &surface) &&
-        1.0f / h > own.mesh.model().slab_back(surface.z))
+        1.0f / h > surface.back_z)
       return free_t;
     free_t = t;
   }
@@ -198,7 +200,7 @@ bool seen_past(const View& center, const Vec3f& x) {
     return false;
   MeshPoint surface;
   if (center.mesh.surface_at(sx, sy, &surface))
-    return center.mesh.model().slab_back(x.z) < surface.z;
+    return center.mesh.slab_back(x.z, surface.pixel) < surface.z;
   const float z =
       g.depth.plane(0)[static_cast<std::size_t>(sy) * g.width + static_cast<std::size_t>(sx)];
   return !std::isfinite(z);

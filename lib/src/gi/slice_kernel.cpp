@@ -106,11 +106,13 @@ int MarchSide(const MeshView& mesh, const SliceFrame& f, const SideMarch& m, Sid
   const VF steps_f = hn::Set(d, static_cast<float>(m.steps));
   const VF t_span = hn::Set(d, m.t_max - 1.0f);
   const VF ox = hn::Set(d, f.ox), oy = hn::Set(d, f.oy), oz = hn::Set(d, f.oz);
-  const VF back_scale = hn::Set(d, f.back_scale);
+  const VF thickness_unit = hn::Set(d, 1.0f / kThicknessSteps);
+  const VF model_thickness = hn::Set(d, m.thickness);
+  const VI steps_i = hn::Set(di, kThicknessSteps);
   const VF normal_unit = hn::Set(d, 1.0f / 127.0f);
   out->pixel[0] = -1;
   out->z[0] = out->x[0] = out->y[0] = out->nx[0] = out->ny[0] = out->nz[0] = 0.0f;
-  out->front_u[0] = out->back_u[0] = 0.0f;
+  out->front_u[0] = out->back_u[0] = out->thickness[0] = 0.0f;
 
   // The samples: where each meets the mesh, and its slab's sector coordinates.
   for (int j = 0; j < padded; j += lanes) {
@@ -161,6 +163,11 @@ int MarchSide(const MeshView& mesh, const SliceFrame& f, const SideMarch& m, Sid
     const VF y = hn::Mul(z, hn::Mul(hn::Sub(hn::Set(d, m.cy), py), hn::Set(d, m.inv_fy)));
     const std::size_t at = static_cast<std::size_t>(j) + 1;
     const VF wx = hn::Sub(x, ox), wy = hn::Sub(y, oy), wz = hn::Sub(z, oz);
+    // The vertex's slab (its texel's thickness code, thickness_of_code's terms).
+    const VI code = hn::And(hn::ShiftRight<24 + kThicknessShift>(word), hn::Set(di, 63));
+    const VF thick =
+        hn::Mul(model_thickness, hn::Mul(hn::ConvertTo(d, hn::Sub(steps_i, code)), thickness_unit));
+    const VF back_scale = hn::Add(one, thick);
     // Seen from behind (surface_model.h): the origin is behind the vertex's tangent plane,
     // n . o < n . p - tolerance x z with p = r / h the vertex's point (r its ray at z = 1, h its
     // 1/z, z = 1/h), i.e. h n . o < n . r - tolerance.
@@ -187,6 +194,7 @@ int MarchSide(const MeshView& mesh, const SliceFrame& f, const SideMarch& m, Sid
     hn::StoreU(nx, d, out->nx.data() + at);
     hn::StoreU(ny, d, out->ny.data() + at);
     hn::StoreU(nz, d, out->nz.data() + at);
+    hn::StoreU(thick, d, out->thickness.data() + at);
     hn::StoreU(SectorCoordinate(d, f, wx, wy, wz), d, out->front_u.data() + at);
     hn::StoreU(
         SectorCoordinate(d, f, hn::Sub(hn::Mul(back_scale, x), ox),
@@ -198,8 +206,6 @@ int MarchSide(const MeshView& mesh, const SliceFrame& f, const SideMarch& m, Sid
   }
 
   // The sectors each sample shadows, bridged to the one before on one continuous surface.
-  const VF thickness = hn::Set(d, m.thickness);
-  const VF back = hn::Set(d, 1.0f + m.thickness);
   for (int j = 0; j < padded; j += lanes) {
     const std::size_t at = static_cast<std::size_t>(j) + 1, before = at - 1;
     const VI none = hn::Set(di, -1);
@@ -214,16 +220,19 @@ int MarchSide(const MeshView& mesh, const SliceFrame& f, const SideMarch& m, Sid
     const VF ny = hn::LoadU(d, out->ny.data() + at), pny = hn::LoadU(d, out->ny.data() + before);
     const VF nz = hn::LoadU(d, out->nz.data() + at), pnz = hn::LoadU(d, out->nz.data() + before);
     const VF z = hn::LoadU(d, out->z.data() + at), pz = hn::LoadU(d, out->z.data() + before);
+    const VF t = hn::LoadU(d, out->thickness.data() + at);
+    const VF pt = hn::LoadU(d, out->thickness.data() + before);
     const VF dx = hn::Sub(hn::LoadU(d, out->x.data() + at), hn::LoadU(d, out->x.data() + before));
     const VF dy = hn::Sub(hn::LoadU(d, out->y.data() + at), hn::LoadU(d, out->y.data() + before));
     const VF dz = hn::Sub(z, pz);
     const VF facing = hn::Add(hn::Add(hn::Mul(nx, pnx), hn::Mul(ny, pny)), hn::Mul(nz, pnz));
     const VF off_plane = hn::Add(hn::Add(hn::Mul(pnx, dx), hn::Mul(pny, dy)), hn::Mul(pnz, dz));
-    const auto coplanar = hn::And(hn::Gt(facing, hn::Set(d, 0.9f)),
-                                  hn::Le(hn::Abs(off_plane), hn::Mul(thickness, MinLike(pz, z))));
-    const auto connected =
-        hn::And(hn::And(hn::IsFinite(pz), hn::IsFinite(z)),
-                hn::And(hn::Le(z, hn::Mul(pz, back)), hn::Le(pz, hn::Mul(z, back))));
+    const auto coplanar =
+        hn::And(hn::Gt(facing, hn::Set(d, 0.9f)),
+                hn::Le(hn::Abs(off_plane), hn::Mul(MinLike(pt, t), MinLike(pz, z))));
+    const auto connected = hn::And(
+        hn::And(hn::IsFinite(pz), hn::IsFinite(z)),
+        hn::And(hn::Le(z, hn::Mul(pz, hn::Add(one, pt))), hn::Le(pz, hn::Mul(z, hn::Add(one, t)))));
     const auto bridge =
         hn::And(hn::RebindMask(d, hn::And(valid, valid_before)), hn::Or(coplanar, connected));
     const VF lo2 = hn::IfThenElse(bridge, MinLike(lo, MinLike(pa, pb)), lo);
@@ -260,7 +269,8 @@ void SideSamples::reserve(int steps) {
   // Whole vectors of up to 16 lanes, and the leading entry for "no step before the first".
   const std::size_t n = static_cast<std::size_t>(steps) + 33;
   if (pixel.size() >= n) return;
-  for (auto* v : {&x, &y, &z, &nx, &ny, &nz, &front_u, &back_u, &distance2}) v->resize(n);
+  for (auto* v : {&x, &y, &z, &nx, &ny, &nz, &thickness, &front_u, &back_u, &distance2})
+    v->resize(n);
   pixel.resize(n);
   bits.resize(n);
 }
@@ -271,13 +281,12 @@ int march_side_scalar(const MeshView& mesh, const SliceFrame& f, const SideMarch
   const float inv_steps = 1.0f / static_cast<float>(m.steps);
   const float width_f = static_cast<float>(mesh.width);
   const float height_f = static_cast<float>(mesh.height);
-  const float back = 1.0f + m.thickness;
   auto min_like = [](float a, float b) { return b < a ? b : a; };
   auto max_like = [](float a, float b) { return a < b ? b : a; };
   int end = m.steps;
   bool before_valid = false;
   float before_x = 0, before_y = 0, before_z = 0, before_n[3] = {0, 0, 0}, before_lo = 0,
-        before_hi = 0;
+        before_hi = 0, before_thick = 0;
   for (int j = 0; j < m.steps; ++j) {
     out->bits[j] = 0;
     out->pixel[j + 1] = -1;
@@ -321,19 +330,21 @@ int march_side_scalar(const MeshView& mesh, const SliceFrame& f, const SideMarch
       end = j;
       break;
     }
+    const float thick = thickness_of_code(t.triangles >> kThicknessShift, m.thickness);
+    const float back_scale = 1.0f + thick;
     const float fa = sector_coordinate(f, wx, wy, wz);
-    const float fb = sector_coordinate(f, f.back_scale * x - f.ox, f.back_scale * y - f.oy,
-                                       f.back_scale * z - f.oz);
+    const float fb =
+        sector_coordinate(f, back_scale * x - f.ox, back_scale * y - f.oy, back_scale * z - f.oz);
     float lo = min_like(fa, fb), hi = max_like(fa, fb);
     const float own_lo = lo, own_hi = hi;
     if (valid_before) {
       const float facing = n[0] * before_n[0] + n[1] * before_n[1] + n[2] * before_n[2];
       const float off_plane = before_n[0] * (x - before_x) + before_n[1] * (y - before_y) +
                               before_n[2] * (z - before_z);
-      const bool coplanar =
-          facing > 0.9f && std::fabs(off_plane) <= m.thickness * min_like(before_z, z);
-      const bool connected = std::isfinite(before_z) && std::isfinite(z) && z <= before_z * back &&
-                             before_z <= z * back;
+      const bool coplanar = facing > 0.9f && std::fabs(off_plane) <= min_like(before_thick, thick) *
+                                                                         min_like(before_z, z);
+      const bool connected = std::isfinite(before_z) && std::isfinite(z) &&
+                             z <= before_z * (1.0f + before_thick) && before_z <= z * back_scale;
       if (coplanar || connected) {
         lo = min_like(lo, before_lo);
         hi = max_like(hi, before_hi);
@@ -342,7 +353,7 @@ int march_side_scalar(const MeshView& mesh, const SliceFrame& f, const SideMarch
     out->bits[j] = sector_bits(lo, hi);
     out->pixel[j + 1] = mark_side(pixel, behind);
     before_valid = true;
-    before_x = x, before_y = y, before_z = z;
+    before_x = x, before_y = y, before_z = z, before_thick = thick;
     before_n[0] = n[0], before_n[1] = n[1], before_n[2] = n[2];
     before_lo = own_lo, before_hi = own_hi;
   }

@@ -41,10 +41,10 @@ inline float fast_atan2(float y, float x) {
 // What a slice's sector coordinates depend on: the origin, the view vector and the slice's
 // direction t across it, the normal's angle gamma in the slice (cos, sin), the hemisphere's
 // bounds gamma -+ pi/2, the measure at the lower bound, sectors per unit measure and the
-// sectors' random rotation; back_scale = 1 + thickness.
+// sectors' random rotation.
 struct SliceFrame {
   float ox, oy, oz, vx, vy, vz, tx, ty, tz;
-  float back_scale, cg, sg, lo_theta, hi_theta, h_lo, to_sector, u_rot;
+  float cg, sg, lo_theta, hi_theta, h_lo, to_sector, u_rot;
 };
 
 // The sector coordinate of the direction from the origin to offset (wx, wy, wz): sector k is
@@ -75,10 +75,25 @@ inline float sector_coordinate(const SliceFrame& f, float wx, float wy, float wz
 struct MeshTexel {
   float inverse_depth;
   std::int8_t nx, ny, nz;
-  std::uint8_t triangles;  // kUpperTriangle | kLowerTriangle
+  // kUpperTriangle | kLowerTriangle, and in the bits from kThicknessShift its slab's thickness
+  // code c: (kThicknessSteps - c) / kThicknessSteps of the model's (0: all of it).
+  std::uint8_t triangles;
 };
 static_assert(sizeof(MeshTexel) == 8, "two 32-bit words, gathered as such");
 constexpr std::uint8_t kUpperTriangle = 1, kLowerTriangle = 2;
+constexpr int kThicknessShift = 2;
+static_assert(kThicknessSteps << kThicknessShift == 256, "the code fills the byte's other bits");
+
+// The texel code of relative thickness t, a multiple of model / kThicknessSteps (0 for model).
+inline int thickness_code(float t, float model) {
+  const int c = kThicknessSteps - static_cast<int>(std::lround(t / model * kThicknessSteps));
+  return std::clamp(c, 0, kThicknessSteps - 1);
+}
+
+// The relative thickness a texel's code stands for.
+inline float thickness_of_code(int code, float model) {
+  return model * (static_cast<float>(kThicknessSteps - code) * (1.0f / kThicknessSteps));
+}
 
 struct MeshView {
   const MeshTexel* texels;
@@ -88,7 +103,7 @@ struct MeshView {
 // One side of a slice: steps samples at screen distances 1 + (t_max - 1) f^2 with f = (j +
 // u_step) / steps, from (qx, qy) along the unit direction (sx, sy), in trace-grid pixels; the
 // camera (cx, cy, 1/fx, 1/fy) in the same units; samples farther than sqrt(max_distance2) from
-// the origin end the side (0: no limit).
+// the origin end the side (0: no limit); the model's thickness (the texels' codes scale it).
 struct SideMarch {
   float qx, qy, sx, sy, t_max, u_step;
   int steps;
@@ -102,7 +117,7 @@ struct SideMarch {
 // arrays are the kernel's own (index j + 1 for step j, index 0 standing for "no step before the
 // first"), padded to whole vectors.
 struct SideSamples {
-  std::vector<float> x, y, z, nx, ny, nz, front_u, back_u, distance2;
+  std::vector<float> x, y, z, nx, ny, nz, thickness, front_u, back_u, distance2;
   std::vector<std::int32_t> pixel;
   std::vector<std::uint32_t> bits;
   // Room for `steps` steps on any SIMD target.

@@ -115,9 +115,10 @@ const SliceAzimuths& slice_azimuths() {
 // The trace grid's mesh (surface_model.h's rules) in the kernel's texels.
 class PackedMesh {
  public:
-  PackedMesh(const Image& depth, const Image& normal, const SurfaceModel& model)
+  PackedMesh(const Image& depth, const Image& normal, const Image& thickness,
+             const SurfaceModel& model)
       : width_(depth.width()), height_(depth.height()), texels_(depth.plane_size()) {
-    const DepthMesh mesh(depth, model);
+    const DepthMesh mesh(depth, model, thickness);
     parallel_for_rows(height_, [&](int j) {
       for (int i = 0; i < width_; ++i) {
         const std::size_t p = static_cast<std::size_t>(j) * width_ + i;
@@ -129,9 +130,10 @@ class PackedMesh {
         t.nx = q(normal.plane(0)[p]);
         t.ny = q(normal.plane(1)[p]);
         t.nz = q(normal.plane(2)[p]);
-        t.triangles =
-            static_cast<std::uint8_t>((mesh.has_triangle(i, j, true) ? kUpperTriangle : 0) |
-                                      (mesh.has_triangle(i, j, false) ? kLowerTriangle : 0));
+        t.triangles = static_cast<std::uint8_t>(
+            (mesh.has_triangle(i, j, true) ? kUpperTriangle : 0) |
+            (mesh.has_triangle(i, j, false) ? kLowerTriangle : 0) |
+            thickness_code(thickness.plane(0)[p], model.thickness) << kThicknessShift);
       }
     });
   }
@@ -192,7 +194,7 @@ struct SliceTracer {
         settings(s),
         misses(m),
         model{static_cast<float>(s.thickness)},
-        mesh(gr.depth, gr.normal, model),
+        mesh(gr.depth, gr.normal, gr.thickness, model),
         mesh_view(mesh.view()),
         w(gb.width()),
         h(gb.height()),
@@ -368,11 +370,9 @@ struct SliceTracer {
                                   (kPi * static_cast<float>(kSectors) * static_cast<float>(slices));
       const float to_sector = static_cast<float>(kSectors) / h_total;
       total_weight += sector_weight * static_cast<float>(kSectors);
-      const SliceFrame frame{
-          origin.x,  origin.y, origin.z,     view.x,        view.y,
-          view.z,    t.x,      t.y,          t.z,           1.0f + model.thickness,
-          cg,        sg,       lowest.theta, highest.theta, h_lo,
-          to_sector, u_rot};
+      const SliceFrame frame{origin.x,      origin.y, origin.z,  view.x, view.y, view.z,
+                             t.x,           t.y,      t.z,       cg,     sg,     lowest.theta,
+                             highest.theta, h_lo,     to_sector, u_rot};
 
       std::uint32_t mask = 0;
       for (int side = 0; side < 2 && mask != all; ++side) {

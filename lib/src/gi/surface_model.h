@@ -6,11 +6,19 @@
 // fixed diagonal from (x, y) to (x+1, y+1), and a triangle only where its three vertices are
 // pairwise connected (each within the other's slab, below). Inverse depth is linear across a
 // triangle in screen space (it is a flat triangle in camera space), so a plane stays a plane.
-// Behind the surface is a slab: the same mesh scaled by (1 + thickness) about the camera centre,
-// i.e. depths from z to z * (1 + thickness). A ray hits where it enters a slab; the light it
+// Behind the surface is a slab: the mesh through each vertex moved back to z * (1 + t), its
+// thickness t, i.e. depths from z to z * (1 + t). A ray hits where it enters a slab; the light it
 // brings is that of the hit triangle's vertex with the largest barycentric weight. Thickness is
 // relative to depth so that the model does not depend on the scene's units. Background pixels
 // (z = +inf) are not vertices.
+//
+// A vertex's thickness is --thickness, unless it lies on a thin feature: a rod, a picket, a blade
+// of grass is about as deep as it is wide, so a slab of a tenth of its depth would wall off the
+// surface behind it (light from a wall behind a lattice would come off the rods). On screen a
+// feature is as wide as the run of pixels on its smooth surface, across and down
+// (feature_thickness): a vertex whose narrower run spans n pixels is at most
+// kDepthPerWidth x n pixels' worth of its depth thick (n / f of it, f the focal length in
+// pixels), in steps of thickness / 64.
 //
 // A ray that meets a surface from behind sees the surface's unseen back, not the lit front the
 // frame shows: it does when its origin lies behind the tangent plane of the vertex whose light
@@ -28,6 +36,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "ssgi/gbuffer.h"
 #include "ssgi/image.h"
 
 namespace ssgi::detail {
@@ -45,29 +54,38 @@ inline std::int32_t mark_side(std::int32_t pixel, bool behind) {
 inline std::int32_t hit_pixel(std::int32_t hit) { return hit & ~kSeenFromBehind; }
 
 struct SurfaceModel {
-  float thickness = 0.1f;
-
-  // The far end of the slab of a surface at depth z.
-  float slab_back(float z) const { return z * (1.0f + thickness); }
-
-  // Whether two neighbouring vertices belong to one continuous surface: each lies within the
-  // other's slab.
-  bool connected(float z0, float z1) const {
-    return std::isfinite(z0) && std::isfinite(z1) && z1 <= slab_back(z0) && z0 <= slab_back(z1);
-  }
+  float thickness = 0.1f;  // the thickest slab: that of a vertex on a wide surface
 };
+
+// A thin feature's slab is at most this many times as deep as its narrower side is wide.
+constexpr float kDepthPerWidth = 2.0f;
+// Neighbouring pixels lie on one smooth surface when each is within this fraction of its depth
+// of the other's tangent plane.
+constexpr float kSmoothTolerance = 0.02f;
+// Thicknesses are multiples of model.thickness / kThicknessSteps (the slice tracer's texels
+// hold them in 6 bits).
+constexpr int kThicknessSteps = 64;
+
+// Each pixel's slab thickness (relative to its depth; see above) for a depth buffer, its unit
+// normals and the camera (focal lengths and centre in its pixels).
+Image feature_thickness(const Image& depth, const Image& normal, float fx, float fy, float cx,
+                        float cy, const SurfaceModel& model);
+// The same for a frame's own pixels.
+Image feature_thickness(const GBuffer& g, const SurfaceModel& model);
 
 // The mesh front surface at a point of the screen.
 struct MeshPoint {
-  float z;    // planar depth of the surface
-  int pixel;  // index (y * width + x) of the vertex whose light a hit here brings
+  float z;       // planar depth of the surface
+  float back_z;  // and of its slab's back
+  int pixel;     // index (y * width + x) of the vertex whose light a hit here brings
 };
 
 // The depth buffer seen as the mesh above. Built once per frame: inverse depths and which
 // triangles exist are precomputed, so a lookup is four loads and a few multiplies.
 class DepthMesh {
  public:
-  DepthMesh(const Image& depth, const SurfaceModel& model);
+  // `thickness`: each pixel's (feature_thickness), of the size of `depth`.
+  DepthMesh(const Image& depth, const SurfaceModel& model, const Image& thickness);
 
   int width() const { return width_; }
   int height() const { return height_; }
@@ -82,12 +100,24 @@ class DepthMesh {
   // Inverse depth of that triangle's surface at offsets (fu, fv) from pixel centre (i, j):
   // barycentric interpolation of the corners' 1/z (exact: the triangle is flat in camera space).
   float inverse_depth_at(int i, int j, bool upper, float fu, float fv) const {
-    const std::size_t a = static_cast<std::size_t>(j) * width_ + i;
-    const std::size_t b = upper ? a + 1 : a + width_;
-    const float wa = upper ? 1.0f - fu : 1.0f - fv;
-    const float wb = upper ? fu - fv : fv - fu;
-    const float wc = upper ? fv : fu;
-    return wa * inverse_depth_[a] + wb * inverse_depth_[b] + wc * inverse_depth_[a + width_ + 1];
+    return interpolate(inverse_depth_, i, j, upper, fu, fv);
+  }
+
+  // The same for the back of its slab: the triangle through the corners' slab backs.
+  float inverse_back_at(int i, int j, bool upper, float fu, float fv) const {
+    return interpolate(inverse_back_, i, j, upper, fu, fv);
+  }
+
+  // The far end of the slab of vertex `pixel` for a point of its surface at depth z.
+  float slab_back(float z, int pixel) const {
+    return z * (1.0f + thickness_[static_cast<std::size_t>(pixel)]);
+  }
+
+  // Whether points at depths z0 and z1 of vertices p0 and p1 belong to one continuous surface:
+  // each lies within the other's slab.
+  bool connected(float z0, int p0, float z1, int p1) const {
+    return std::isfinite(z0) && std::isfinite(z1) && z1 <= slab_back(z0, p0) &&
+           z0 <= slab_back(z1, p1);
   }
 
   // The pixel whose light a hit on that triangle at offsets (fu, fv) brings: the corner with
@@ -112,6 +142,7 @@ class DepthMesh {
     const bool upper = fu >= fv;
     if (!has_triangle(i, j, upper)) return false;
     out->z = 1.0f / inverse_depth_at(i, j, upper, fu, fv);
+    out->back_z = 1.0f / inverse_back_at(i, j, upper, fu, fv);
     out->pixel = heaviest_vertex(i, j, upper, fu, fv);
     return true;
   }
@@ -119,10 +150,22 @@ class DepthMesh {
   const SurfaceModel& model() const { return model_; }
 
  private:
+  float interpolate(const std::vector<float>& v, int i, int j, bool upper, float fu,
+                    float fv) const {
+    const std::size_t a = static_cast<std::size_t>(j) * width_ + i;
+    const std::size_t b = upper ? a + 1 : a + width_;
+    const float wa = upper ? 1.0f - fu : 1.0f - fv;
+    const float wb = upper ? fu - fv : fv - fu;
+    const float wc = upper ? fv : fu;
+    return wa * v[a] + wb * v[b] + wc * v[a + width_ + 1];
+  }
+
   static constexpr std::uint8_t kUpper = 1, kLower = 2;
   int width_, height_;
   SurfaceModel model_;
+  std::vector<float> thickness_;         // per pixel
   std::vector<float> inverse_depth_;     // 1/z per pixel
+  std::vector<float> inverse_back_;      // 1/(z (1 + thickness)) per pixel
   std::vector<std::uint8_t> triangles_;  // per quad (top-left pixel index): kUpper | kLower
 };
 

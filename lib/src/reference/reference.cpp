@@ -113,12 +113,7 @@ const HalfShape& shape_of(bool upper) { return upper ? kUpperHalf : kLowerHalf; 
 class SlabScene {
  public:
   SlabScene(const GBuffer& g, const DepthMesh& mesh, RTCFilterFunctionN filter)
-      : g_(g),
-        model_(mesh.model()),
-        mesh_(mesh),
-        device_(g.path),
-        width_(g.width()),
-        height_(g.height()) {
+      : g_(g), mesh_(mesh), device_(g.path), width_(g.width()), height_(g.height()) {
     scene_.reset(rtcNewScene(device_.get()));
     device_.check("creating the scene");
     // Adjacent faces share edges: robust traversal keeps rays from slipping between them.
@@ -210,7 +205,8 @@ class SlabScene {
         const bool surface = std::isfinite(z);
         const double px = x + ox + 0.5, py = y + oy + 0.5;
         const Vec3d f = surface ? g_.camera.unproject(px, py, z) : Vec3d{};
-        const Vec3d b = surface ? g_.camera.unproject(px, py, model_.slab_back(z)) : Vec3d{};
+        const int pixel = y * width_ + x;
+        const Vec3d b = surface ? g_.camera.unproject(px, py, mesh_.slab_back(z, pixel)) : Vec3d{};
         const std::size_t p = 3 * (static_cast<std::size_t>(y) * width_ + x);
         front[p] = static_cast<float>(f.x), front[p + 1] = static_cast<float>(f.y);
         front[p + 2] = static_cast<float>(f.z);
@@ -221,7 +217,6 @@ class SlabScene {
   }
 
   const GBuffer& g_;
-  SurfaceModel model_;
   const DepthMesh& mesh_;
   EmbreeDevice device_;
   int width_, height_;
@@ -277,8 +272,7 @@ class ReferenceTracer {
  public:
   ReferenceTracer(const GBuffer& g, const GiSettings& settings, const SurfaceModel& model)
       : g_(g),
-        model_(model),
-        mesh_(g.depth, model),
+        mesh_(g.depth, model, feature_thickness(g, model)),
         screen_{g.camera, static_cast<float>(g.data_window.x0 - g.display_window.x0),
                 static_cast<float>(g.data_window.y0 - g.display_window.y0)},
         tfar_(settings.max_distance > 0 ? static_cast<float>(settings.max_distance) : kInf),
@@ -346,7 +340,7 @@ class ReferenceTracer {
       if (!mesh_.surface_at(sx0 + dx * f, sy0 + dy * f, &surface)) return -1;
       const float h = h0 + (h1 - h0) * f;
       const float z = h > 0 ? 1.0f / h : kInf;
-      return z >= surface.z && z <= model_.slab_back(surface.z) ? surface.pixel : -1;
+      return z >= surface.z && z <= surface.back_z ? surface.pixel : -1;
     };
     if (!screen_.in_pixel(o, x, y)) {
       const int light = light_inside_at(0.0f);
@@ -361,7 +355,6 @@ class ReferenceTracer {
   }
 
   const GBuffer& g_;
-  SurfaceModel model_;
   DepthMesh mesh_;
   Screen screen_;
   float tfar_;
