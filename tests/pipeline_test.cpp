@@ -17,6 +17,7 @@
 #include "directions.h"
 #include "fixture_frame.h"
 #include "gtest/gtest.h"
+#include "input_frame.h"
 #include "misses.h"
 #include "ssgi/color.h"
 #include "ssgi/io.h"
@@ -1033,6 +1034,27 @@ TEST(Pipeline, NormalsFromDepthMatchTheFlatSurfacesOfThePass) {
     std::printf("%s: %zu of %zu normals within 1 degree\n", pattern, agree, surfaces);
     ASSERT_GT(surfaces, 100u);
     EXPECT_GE(static_cast<double>(agree), share * surfaces);
+  }
+}
+
+// --normals depth on features one pixel across: a wall facing the camera with a pole (a column,
+// 0.3 nearer) and a rod (a row, 0.1 nearer) before it. Either one-sided difference across the
+// pole or the rod runs to the wall and would turn its normal sideways; a pixel both of whose
+// neighbours lie nearer or both farther faces the camera along that axis, so every pixel here
+// gets the wall's normal, the camera's -z.
+TEST(Pipeline, NormalsFromDepthTurnFeaturesOnePixelAcrossToTheCamera) {
+  const Box2i window{0, 0, 64, 48};
+  const Camera cam = camera_from_fov(60.0, window);
+  Image depth(64, 48, 1, 10.0f);
+  for (int y = 0; y < 48; ++y) depth.at(0, 20, y) = 9.7f;  // the pole
+  for (int x = 0; x < 64; ++x) depth.at(0, x, 30) = 9.9f;  // the rod
+  const Image n = detail::normals_from_depth(depth, cam, window, window);
+  for (const auto& [x, y] : {std::pair{20, 10}, std::pair{40, 30}, std::pair{20, 30},
+                             std::pair{19, 10}, std::pair{21, 10}, std::pair{40, 29}}) {
+    SCOPED_TRACE(std::to_string(x) + "," + std::to_string(y));
+    EXPECT_NEAR(n.at(0, x, y), 0.0f, 1e-4f);
+    EXPECT_NEAR(n.at(1, x, y), 0.0f, 1e-4f);
+    EXPECT_NEAR(n.at(2, x, y), -1.0f, 1e-6f);
   }
 }
 

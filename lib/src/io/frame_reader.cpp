@@ -235,11 +235,10 @@ void convert_normals(Image& normal, const Image& depth, NormalSpace space, const
   });
 }
 
-// Unit camera-space normals facing the camera from the depth buffer's pixel derivatives: the
-// camera-space points of the pixel and its neighbours; along each axis the one-sided difference
-// with the smaller depth step (so that a depth edge does not bend the normal of the surface on
-// either side), the other side where one is background; the normal across the two, turned to
-// face the camera. A pixel with no surface neighbour on an axis faces the camera.
+}  // namespace
+
+namespace detail {
+
 Image normals_from_depth(const Image& depth, const Camera& camera, const Box2i& display,
                          const Box2i& data) {
   const int w = depth.width(), h = depth.height();
@@ -254,10 +253,17 @@ Image normals_from_depth(const Image& depth, const Camera& camera, const Box2i& 
   };
   // The difference towards the neighbour with the smaller depth step; false when neither is a
   // surface.
+  constexpr double kFeatureStep = 0.005;
   auto derivative = [&](const Vec3d& c, int x, int y, int dx, int dy, Vec3d* d) {
     Vec3d a, b;
     const bool has_a = point(x + dx, y + dy, &a), has_b = point(x - dx, y - dy, &b);
     if (!has_a && !has_b) return false;
+    if (has_a && has_b && (a.z - c.z) * (b.z - c.z) > 0 &&
+        std::min(std::fabs(a.z - c.z), std::fabs(b.z - c.z)) > kFeatureStep * c.z) {
+      const Vec3d across = camera.unproject(x + dx + ox, y + dy + oy, c.z);
+      *d = {across.x - c.x, across.y - c.y, across.z - c.z};
+      return true;
+    }
     const bool use_a = has_a && (!has_b || std::fabs(a.z - c.z) <= std::fabs(c.z - b.z));
     *d = use_a ? Vec3d{a.x - c.x, a.y - c.y, a.z - c.z} : Vec3d{c.x - b.x, c.y - b.y, c.z - b.z};
     return true;
@@ -284,6 +290,10 @@ Image normals_from_depth(const Image& depth, const Camera& camera, const Box2i& 
   });
   return normal;
 }
+
+}  // namespace detail
+
+namespace {
 
 // Motion in the library's convention, in place: display pixels, +y down, offsets to frame -1
 // (motion_prev) and +1 (motion_next). `xy` and `zw` hold the stored channels (zw: the third
@@ -526,7 +536,7 @@ GBuffer convert_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
     if (report) warn_if_no_surfaces(counts, g.depth.plane_size(), preset.depth_kind, path);
   }
   if ((roles & role_bit(Role::kNormal)) && seq.normals_from_depth) {
-    g.normal = normals_from_depth(g.depth, g.camera, g.display_window, g.data_window);
+    g.normal = detail::normals_from_depth(g.depth, g.camera, g.display_window, g.data_window);
   } else if (read_normals) {
     non_finite += sanitize(&g.normal);
     convert_normals(g.normal, g.depth, preset.normal_space, g.camera, g.display_window,
