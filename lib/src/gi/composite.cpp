@@ -50,6 +50,10 @@ FrameResult composite_frame(const GBuffer& g, Image indirect, Image coverage) {
   parallel_for_rows(h, [&](int y) {
     const std::size_t row = static_cast<std::size_t>(y) * w;
     const float* depth = g.depth.plane(0) + row;
+    // A surface without diffuse albedo (an emitter, a mirror) reflects no diffuse light: its
+    // indirect is 0, as in the renderers' own diffuse passes.
+    const float *red = g.albedo.plane(0) + row, *green = g.albedo.plane(1) + row,
+                *blue = g.albedo.plane(2) + row;
     for (int c = 0; c < 3; ++c) {
       float* ind = r.indirect.plane(c) + row;
       float* gi = r.gi.plane(c) + row;
@@ -64,6 +68,7 @@ FrameResult composite_frame(const GBuffer& g, Image indirect, Image coverage) {
           out[x] = background ? finite(background[x]) : 0.0f;
           continue;
         }
+        if (red[x] == 0 && green[x] == 0 && blue[x] == 0) ind[x] = 0.0f;
         gi[x] = finite(albedo[x] * ind[x]);
         float rgb = direct[x] + gi[x];
         if (emitted) rgb += emitted[x];

@@ -6,7 +6,8 @@
 
 namespace ssgi::detail {
 
-// gi = albedo x indirect; composite = direct + emission + gi on surfaces, the input beauty
+// indirect 0 on surfaces without diffuse albedo (all three channels 0); gi = albedo x
+// indirect; composite = direct + emission + gi on surfaces, the input beauty
 // (or 0) on background pixels; alpha from the beauty, else 1; the coverage, when given, kept
 // within [0, 1] and 0 on background.
 FrameResult composite_frame(const GBuffer& g, Image indirect, Image coverage = {});
