@@ -942,26 +942,36 @@ TEST(Pipeline, LightPassesBehindAThinPole) {
 }
 
 // A room: the frame shows a floor and a ceiling along its border and a far wall between them,
-// no side wall and no sky. The border says nothing faces right or left, but a room has walls:
-// every direction is enclosed. Without the ceiling (a floor before a backdrop: a studio) the
-// sides stay open.
+// no side wall and no sky. The border says nothing faces right, left or back, but a room has
+// walls on the sides the frame cannot show: those are enclosed. Ahead the far wall is on
+// screen, and forward stays as measured: 0.70 for the room's band of wall across the frame,
+// 0 in a long hall whose far wall is too far for a pixel. Without the ceiling (a floor before
+// a backdrop: a studio) the sides stay open.
 TEST(Pipeline, AFloorAndACeilingWithoutSkyCloseTheRoomsSides) {
   GiSettings base;
-  for (const bool ceiling : {true, false}) {
-    SCOPED_TRACE(ceiling ? "room" : "studio");
+  struct Case {
+    const char* name;
+    double far;
+    bool ceiling;
+    const char* enclosed;
+  };
+  for (const Case& c : {Case{"room", 20, true, "1.00 1.00 1.00 1.00 0.70 1.00"},
+                        Case{"hall", 400, true, "1.00 1.00 1.00 1.00 0.00 1.00"},
+                        Case{"studio", 20, false, "0.00 0.00 0.00 1.00 1.00 0.00"}}) {
+    SCOPED_TRACE(c.name);
     Frame f = blank_scene(base, 60.0, std::numeric_limits<float>::infinity());
     GBuffer& g = f.g;
     const Camera& cam = g.camera;
     for (int y = 0; y < g.height(); ++y)
       for (int x = 0; x < g.width(); ++x) {
         const double ry = (cam.cy - (y + 0.5)) / cam.fy;
-        const double far = 20, floor_y = -1.5, ceiling_y = 1.5;
-        float depth = static_cast<float>(far);
+        const double floor_y = -1.5, ceiling_y = 1.5;
+        float depth = static_cast<float>(c.far);
         int axis = 2;
         float sign = -1;
-        if (ry < 0 && floor_y / ry < far) {
+        if (ry < 0 && floor_y / ry < c.far) {
           depth = static_cast<float>(floor_y / ry), axis = 1, sign = 1;
-        } else if (ceiling && ry > 0 && ceiling_y / ry < far) {
+        } else if (c.ceiling && ry > 0 && ceiling_y / ry < c.far) {
           depth = static_cast<float>(ceiling_y / ry), axis = 1, sign = -1;
         }
         g.depth.at(0, x, y) = depth;
@@ -969,9 +979,9 @@ TEST(Pipeline, AFloorAndACeilingWithoutSkyCloseTheRoomsSides) {
       }
     const detail::Environment black;
     const std::string decided = detail::MissModel(g, MissMode::kAuto, black).describe();
-    const char* closed = "enclosed right left up down forward back: 1.00 1.00 1.00 1.00 1.00 1.00";
-    const char* studio = "enclosed right left up down forward back: 0.00 0.00 0.00 1.00 1.00 0.00";
-    EXPECT_NE(decided.find(ceiling ? closed : studio), std::string::npos) << decided;
+    EXPECT_NE(decided.find(std::string("enclosed right left up down forward back: ") + c.enclosed),
+              std::string::npos)
+        << decided;
   }
 }
 

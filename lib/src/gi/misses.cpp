@@ -161,11 +161,14 @@ MissModel::MissModel(const GBuffer& g, MissMode mode, const Environment& env)
       // facade gets the ground before it; a studio without sky keeps its dark surroundings).
       ground_ = sky_.back();
       // A room: a frame whose border shows a ceiling and a floor, under no sky, has walls on
-      // every side, though its border may show few surfaces facing some of them (an office's
-      // far wall in the middle of the frame, furniture along the sides).
+      // the sides the frame cannot show, right, left and behind, though its border may show
+      // few surfaces facing them (furniture along an office's sides). Ahead the frame shows
+      // the far wall itself, which rays heading forward meet on screen: that enclosure stays
+      // as measured (closed too, a playroom whose far wall is mid-frame came out 1.27x too
+      // bright; tests/accuracy/training.sh).
       {
         const float room = std::min(enclosed_[2], enclosed_[3]) * (1.0f - ground_);
-        for (const int f : {0, 1, 4, 5}) enclosed_[f] = std::max(enclosed_[f], room);
+        for (const int f : {0, 1, 5}) enclosed_[f] = std::max(enclosed_[f], room);
       }
       // Behind the camera: per elevation the most open band's share, fitted the same way, as
       // far as the two sides are not both enclosed (chosen on the training set,

@@ -16,7 +16,8 @@
 //  - six cube directions (the view's horizontal right, left, forward and back, up and down)
 //    and, for each, how far it is enclosed: how much the frame's surfaces near its border
 //    (border_weight) face that way. Behind the camera, which no visible surface can face, is
-//    enclosed at least as much as the mean of right and left;
+//    enclosed at least as much as the mean of right and left; in a room (a ceiling and a
+//    floor along the border, no sky) right, left and back at least as much as both;
 //  - per bounce, each direction's colour: the light of the border surfaces facing it.
 // The part of a miss along d that is not sky is split over the cube's directions by d's squared
 // components; each part meets a surface as far as its direction is enclosed, and brings that
