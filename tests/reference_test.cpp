@@ -145,7 +145,7 @@ TEST(Reference, AgreesWithADenseWalkThroughTheModel) {
   const detail::Environment env;
   const detail::RayHits hits = detail::trace_reference(g, s, detail::MissModel(g, s.miss, env));
   const detail::SurfaceModel model{static_cast<float>(s.thickness)};
-  const detail::DepthMesh mesh(g.depth, model, detail::feature_thickness(g, model));
+  const detail::DepthMesh mesh(g.depth, detail::feature_thickness(g, model));
   int rays = 0, differ = 0;
   for (int p = 0; p < g.width() * g.height(); p += 7) {
     const int x = p % g.width(), y = p / g.width();

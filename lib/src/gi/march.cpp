@@ -199,7 +199,7 @@ struct Tracer {
       : g(gb),
         settings(s),
         model{static_cast<float>(s.thickness)},
-        mesh(gb.depth, model, feature_thickness(gb, model)),
+        mesh(gb.depth, feature_thickness(gb, model)),
         width(gb.width()),
         height(gb.height()),
         offset_x(gb.data_window.x0 - gb.display_window.x0),

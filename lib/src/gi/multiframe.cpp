@@ -74,9 +74,9 @@ struct View {
   std::vector<std::array<float, 3>> light;
 
   // `own_light` null: the light of one bounce (what the surfaces reflect, their backs nothing).
-  View(const FrameTrace& t, const Image* own_light, const SurfaceModel& model)
+  View(const FrameTrace& t, const Image* own_light)
       : trace(&t),
-        mesh(t.grid.depth, model, t.grid.thickness),
+        mesh(t.grid.depth, t.grid.thickness),
         light(own_light ? 2 * t.grid.origin.size() : 0) {
     const TraceGrid& g = t.grid;
     if (light.empty()) return;
@@ -265,7 +265,6 @@ bool continue_rays(const std::vector<const FrameTrace*>& frames,
   ContinuationReport local;
   ContinuationReport& r = report ? *report : local;
   r = ContinuationReport();
-  const SurfaceModel model{static_cast<float>(settings.thickness)};
   // The neighbours nearest first (the earlier of two as near), cameras unlike the centre's.
   std::vector<int> order;
   for (int i = 0; i < static_cast<int>(frames.size()); ++i)
@@ -281,10 +280,10 @@ bool continue_rays(const std::vector<const FrameTrace*>& frames,
   std::vector<View> views;
   views.reserve(order.size() + 1);
   // The centre's own view only tells what it sees: its light is not read.
-  views.emplace_back(self, nullptr, model);
+  views.emplace_back(self, nullptr);
   std::vector<Neighbour> neighbours;
   for (int i : order) {
-    views.emplace_back(*frames[i], settings.bounces > 1 ? light[i] : nullptr, model);
+    views.emplace_back(*frames[i], settings.bounces > 1 ? light[i] : nullptr);
     neighbours.push_back({&views.back(), between(self.camera, frames[i]->camera),
                           between(frames[i]->camera, self.camera)});
   }

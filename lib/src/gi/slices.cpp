@@ -118,7 +118,7 @@ class PackedMesh {
   PackedMesh(const Image& depth, const Image& normal, const Image& thickness,
              const SurfaceModel& model)
       : width_(depth.width()), height_(depth.height()), texels_(depth.plane_size()) {
-    const DepthMesh mesh(depth, model, thickness);
+    const DepthMesh mesh(depth, thickness);
     parallel_for_rows(height_, [&](int j) {
       for (int i = 0; i < width_; ++i) {
         const std::size_t p = static_cast<std::size_t>(j) * width_ + i;

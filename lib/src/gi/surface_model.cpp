@@ -63,10 +63,9 @@ Image feature_thickness(const GBuffer& g, const SurfaceModel& model) {
       static_cast<float>(cam.cy - (g.data_window.y0 - g.display_window.y0)), model);
 }
 
-DepthMesh::DepthMesh(const Image& depth, const SurfaceModel& model, const Image& thickness)
+DepthMesh::DepthMesh(const Image& depth, const Image& thickness)
     : width_(depth.width()),
       height_(depth.height()),
-      model_(model),
       thickness_(thickness.plane(0), thickness.plane(0) + thickness.plane_size()),
       inverse_depth_(depth.plane_size()),
       inverse_back_(depth.plane_size()),

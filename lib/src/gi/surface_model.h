@@ -85,7 +85,7 @@ struct MeshPoint {
 class DepthMesh {
  public:
   // `thickness`: each pixel's (feature_thickness), of the size of `depth`.
-  DepthMesh(const Image& depth, const SurfaceModel& model, const Image& thickness);
+  DepthMesh(const Image& depth, const Image& thickness);
 
   int width() const { return width_; }
   int height() const { return height_; }
@@ -147,8 +147,6 @@ class DepthMesh {
     return true;
   }
 
-  const SurfaceModel& model() const { return model_; }
-
  private:
   float interpolate(const std::vector<float>& v, int i, int j, bool upper, float fu,
                     float fv) const {
@@ -162,7 +160,6 @@ class DepthMesh {
 
   static constexpr std::uint8_t kUpper = 1, kLower = 2;
   int width_, height_;
-  SurfaceModel model_;
   std::vector<float> thickness_;         // per pixel
   std::vector<float> inverse_depth_;     // 1/z per pixel
   std::vector<float> inverse_back_;      // 1/(z (1 + thickness)) per pixel

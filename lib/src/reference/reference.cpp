@@ -272,7 +272,7 @@ class ReferenceTracer {
  public:
   ReferenceTracer(const GBuffer& g, const GiSettings& settings, const SurfaceModel& model)
       : g_(g),
-        mesh_(g.depth, model, feature_thickness(g, model)),
+        mesh_(g.depth, feature_thickness(g, model)),
         screen_{g.camera, static_cast<float>(g.data_window.x0 - g.display_window.x0),
                 static_cast<float>(g.data_window.y0 - g.display_window.y0)},
         tfar_(settings.max_distance > 0 ? static_cast<float>(settings.max_distance) : kInf),
