@@ -251,9 +251,11 @@ Image normals_from_depth(const Image& depth, const Camera& camera, const Box2i& 
     *p = camera.unproject(x + ox, y + oy, z);
     return true;
   };
-  // The difference towards the neighbour with the smaller depth step; false when neither is a
-  // surface.
+  // A feature one pixel across: both neighbours nearer, or both farther, by more than this
+  // fraction of the pixel's depth (input_frame.h).
   constexpr double kFeatureStep = 0.005;
+  // The difference towards the neighbour with the smaller depth step, or across a feature one
+  // pixel wide at its own depth; false when neither neighbour is a surface.
   auto derivative = [&](const Vec3d& c, int x, int y, int dx, int dy, Vec3d* d) {
     Vec3d a, b;
     const bool has_a = point(x + dx, y + dy, &a), has_b = point(x - dx, y - dy, &b);

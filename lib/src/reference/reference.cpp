@@ -207,7 +207,7 @@ class SlabScene {
         const Vec3d f = surface ? g_.camera.unproject(px, py, z) : Vec3d{};
         const int pixel = y * width_ + x;
         const Vec3d b = surface ? g_.camera.unproject(px, py, mesh_.slab_back(z, pixel)) : Vec3d{};
-        const std::size_t p = 3 * (static_cast<std::size_t>(y) * width_ + x);
+        const std::size_t p = 3 * static_cast<std::size_t>(pixel);
         front[p] = static_cast<float>(f.x), front[p + 1] = static_cast<float>(f.y);
         front[p + 2] = static_cast<float>(f.z);
         back[p] = static_cast<float>(b.x), back[p + 1] = static_cast<float>(b.y);
