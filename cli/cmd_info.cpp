@@ -109,6 +109,9 @@ void print_json(const ssgi::InputOptions& in, const ssgi::SequenceInfo& seq, con
       {"resolution", {seq.display_window.width(), seq.display_window.height()}},
       {"display_window", window_json(seq.display_window)},
       {"data_window", window_json(seq.data_window)},
+      {"context", seq.context ? Json({{"sequence", in.context},
+                                      {"data_window", window_json(seq.context->data_window)}})
+                              : Json(nullptr)},
       {"layout",
        {{"name", preset.name},
         {"renderer", preset.renderer},
@@ -140,6 +143,9 @@ void print_text(const ssgi::InputOptions& in, const ssgi::SequenceInfo& seq, con
   std::printf("display window %s\n", window_string(seq.display_window).c_str());
   std::printf("data window    %s%s\n", window_string(seq.data_window).c_str(),
               seq.data_window == seq.display_window ? "" : " (differs from the display window)");
+  if (seq.context)
+    std::printf("context:       %s, data window %s\n", in.context.c_str(),
+                window_string(seq.context->data_window).c_str());
   std::printf("layout:        %s (%s)\n", preset.name.c_str(), preset.renderer.c_str());
   if (!layout.detected_because.empty())
     std::printf("               %s\n", layout.detected_because.c_str());

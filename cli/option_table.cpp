@@ -79,6 +79,8 @@ const std::vector<OptionSpec> kTable = {
      "a static camera with this horizontal field of view", nullptr},
     {kCamera, "camera", 0, "FILE.json", OptionGroup::kInput, kReading,
      "per-frame cameras from a sidecar file", nullptr},
+    {kContext, "context", 0, "PATTERN", OptionGroup::kInput, kRunCommand | kInfoCommand,
+     "a region render's whole frames: rays leaving the data window meet what they show", nullptr},
     // gi
     {kPreset, "preset", 0, "P", OptionGroup::kGi, kTracing,
      "draft, default or final: the tracing settings below (man ssgi, PRESETS); options given "

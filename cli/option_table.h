@@ -34,6 +34,7 @@ enum OptionId : int {
   kNormals,
   kFov,
   kCamera,
+  kContext,
   kRays,
   kTracer,
   kSlices,

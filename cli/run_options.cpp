@@ -157,6 +157,10 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
       case kCamera:
         in.camera.sidecar = a;
         break;
+      case kContext:
+        if (*a == '\0') ssgi::throw_usage("--context: empty pattern");
+        in.context = a;
+        break;
       case kRays:
         gi.rays = static_cast<int>(parse_long("rays", a, 1, 4096));
         break;

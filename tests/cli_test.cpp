@@ -479,6 +479,84 @@ TEST_F(Cli, DataAndDisplayWindowsAreKept) {
   }
 }
 
+// A region render (a data window inside the display window) lacks what lies around it: alone it
+// gets a fraction of the whole frame's light there; with the whole shot as --context it gets the
+// light the whole frame gets over its pixels, bit for bit, in the temporal window too, and writes
+// its own window and channels.
+TEST_F(Cli, ARegionRenderWithItsContextGetsTheWholeFramesLight) {
+  const OIIO::ROI region(24, 72, 16, 48);  // the centre quarter of the 96x64 display window
+  for (int f = 1; f <= 6; ++f) {
+    const std::string n = "000" + std::to_string(f);
+    const OIIO::ImageBuf whole(testdata("sample/sample." + n + ".exr"));
+    const OIIO::ImageBuf crop = OIIO::ImageBufAlgo::crop(whole, region);
+    ASSERT_TRUE(crop.write(path("crop." + n + ".exr"))) << crop.geterror();
+  }
+  const std::string whole_pattern = testdata("sample/sample.####.exr");
+  ASSERT_EQ(run_ssgi({"run", whole_pattern, "-o", path("whole.####.exr"), "-q"}).exit_code, 0);
+  ASSERT_EQ(run_ssgi({"run", path("crop.####.exr"), "-o", path("alone.####.exr"), "-q"}).exit_code,
+            0);
+  const CliResult r = run_ssgi({"run", path("crop.####.exr"), "--context", whole_pattern, "-o",
+                                path("region.####.exr"), "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  double alone_sum = 0, whole_sum = 0;
+  for (int f = 1; f <= 6; ++f) {
+    const std::string n = "000" + std::to_string(f);
+    const ExrImage whole = read_exr(path("whole." + n + ".exr"));
+    const ExrImage alone = read_exr(path("alone." + n + ".exr"));
+    const ExrImage got = read_exr(path("region." + n + ".exr"));
+    const ExrImage input = read_exr(path("crop." + n + ".exr"));
+    EXPECT_EQ(std::vector<int>({got.spec.x, got.spec.y, got.spec.width, got.spec.height,
+                                got.spec.full_width, got.spec.full_height}),
+              std::vector<int>({24, 16, 48, 32, 96, 64}));
+    for (const std::string& c : input.spec.channelnames)
+      EXPECT_EQ(got.planes.at(c), input.planes.at(c)) << "frame " << f << ", input's " << c;
+    for (const std::string& c : kOurChannels) {
+      const std::vector<float>& full = whole.planes.at(c);
+      const std::vector<float>& mine = got.planes.at(c);
+      ASSERT_EQ(mine.size(), 48u * 32u);
+      int differ = 0;
+      for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 48; ++x) differ += mine[y * 48 + x] != full[(y + 16) * 96 + x + 24];
+      EXPECT_EQ(differ, 0) << "frame " << f << ", " << c;
+    }
+    for (int y = 0; y < 32; ++y)
+      for (int x = 0; x < 48; ++x) {
+        alone_sum += alone.planes.at("indirect.G")[y * 48 + x];
+        whole_sum += whole.planes.at("indirect.G")[(y + 16) * 96 + x + 24];
+      }
+  }
+  // The crop alone lacks the walls around it (far outside issue 11's 25%).
+  EXPECT_GT(whole_sum, 0.1 * 6 * 48 * 32);
+  EXPECT_LT(alone_sum, 0.5 * whole_sum);
+}
+
+// A context that is not the region's whole picture is refused before anything is written, with
+// the context's file named.
+TEST_F(Cli, AContextThatDoesNotHoldTheRegionIsRefused) {
+  const OIIO::ImageBuf sample(testdata("sample/sample.0001.exr"));
+  // Another display window.
+  OIIO::ImageBuf other = sample;
+  other.set_full(0, 95, 0, 63 + 8, 0, 0);
+  ASSERT_TRUE(other.write(path("taller.0001.exr")));
+  // A data window beside the region's.
+  ASSERT_TRUE(
+      OIIO::ImageBufAlgo::crop(sample, OIIO::ROI(0, 24, 0, 16)).write(path("corner.0001.exr")));
+  for (const auto& [context, phrase] :
+       {std::pair{path("taller.0001.exr"), "display window"},
+        std::pair{path("corner.0001.exr"), "does not hold the input's (24,16)-(71,47)"}}) {
+    const CliResult r = run_ssgi(
+        {"run", testdata("crop/crop.0001.exr"), "--context", context, "-o", path("out.0001.exr")});
+    EXPECT_EQ(r.exit_code, 3) << r.err;
+    expect_one_error(r, context, phrase);
+    EXPECT_FALSE(fs::exists(path("out.0001.exr")));
+  }
+  const CliResult missing = run_ssgi({"run", testdata("crop/crop.0001.exr"), "--context",
+                                      path("none.####.exr"), "-o", path("out.0001.exr")});
+  EXPECT_EQ(missing.exit_code, 4) << missing.err;
+  expect_one_error(missing, path("none.0001.exr"), "missing");
+  EXPECT_FALSE(fs::exists(path("out.0001.exr")));
+}
+
 TEST_F(Cli, NoPassthroughWritesOnlyOurChannels) {
   const CliResult r = run_ssgi({"run", testdata("sample/sample.0001.exr"), "-o", path("o.exr"),
                                 "--rays", "2", "-q", "--no-passthrough"});

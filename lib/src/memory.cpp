@@ -155,7 +155,7 @@ MemoryLimit scheduler_memory_limit(const MemoryLimitSources& sources) {
 MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, const GiSettings& s,
                                    const WriteOptions& write, int threads,
                                    const PipelineMemory& memory) {
-  const int w = seq.data_window.width(), h = seq.data_window.height();
+  const int w = seq.working_window().width(), h = seq.working_window().height();
   const std::uint64_t pixels = static_cast<std::uint64_t>(w) * h;
   const int scale = std::max(1, plan.trace_scale);
   const std::uint64_t grid = static_cast<std::uint64_t>((w + scale - 1) / scale) *

@@ -68,6 +68,9 @@ Plan make_plan(const SequenceInfo& seq, const GiSettings& s) {
     plan.reasons.push_back(std::string("read ") + role_name(role) + ": " + why);
   };
   need(Role::kDepth, "the surfaces rays start from and hit");
+  if (seq.context)
+    plan.reasons.push_back("context: " + seq.context->pattern.path_for(seq.frames.front()) +
+                           " and its sequence fill the picture around the data window (--context)");
   if (seq.normals_from_depth) {
     plan.roles |= role_bit(Role::kNormal);
     plan.reasons.push_back(
@@ -126,7 +129,7 @@ Plan make_plan(const SequenceInfo& seq, const GiSettings& s) {
     if (plan.trace_scale == 0) {
       plan.trace_scale = 1;
       while (plan.trace_scale < 8 &&
-             seq.data_window.width() / (2 * plan.trace_scale) >= s.trace_width)
+             seq.working_window().width() / (2 * plan.trace_scale) >= s.trace_width)
         plan.trace_scale *= 2;
     }
   }

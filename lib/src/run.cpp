@@ -43,7 +43,10 @@ void check_outputs(const SequenceInfo& seq, const SequencePattern& out, const st
     throw_usage("output '" + out_spec + "' must end in .exr: ssgi writes OpenEXR");
   // Each path resolved once (a shot has thousands of frames), then looked up.
   std::map<std::string, int> inputs;
-  for (int g : seq.frames_on_disk) inputs.emplace(resolved(seq.pattern.path_for(g)), g);
+  for (int g : seq.frames_on_disk) {
+    inputs.emplace(resolved(seq.pattern.path_for(g)), g);
+    if (seq.context) inputs.emplace(resolved(seq.context->pattern.path_for(g)), g);
+  }
   std::set<std::string> directories;
   for (int f : seq.frames) {
     const std::string path = out.path_for(f);
@@ -76,6 +79,7 @@ std::string settings_text(const RunOptions& o, const SequenceInfo& seq) {
     add("fov", fov);
   }
   if (!o.input.camera.sidecar.empty()) add("camera", o.input.camera.sidecar);
+  if (seq.context) add("context", o.input.context);
   add("compression", o.write.compression);
   add("datatype", o.write.half ? "half" : "float");
   add("passthrough", o.write.passthrough ? "yes" : "no");

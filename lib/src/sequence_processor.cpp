@@ -110,6 +110,35 @@ GBuffer without_planes(const GBuffer& g) {
   return out;
 }
 
+// `image`, covering `from`, cut to `to` (which `from` holds).
+Image cut(const Image& image, const Box2i& from, const Box2i& to) {
+  if (image.empty()) return Image();
+  Image out(to.width(), to.height(), image.channels());
+  copy_window(image, from, &out, to);
+  return out;
+}
+
+// --context: a frame lit over the whole picture, and its results, cut to the input's data
+// window, which is all that is written of it.
+void cut_to(const Box2i& window, std::shared_ptr<const GBuffer>* frame, FrameResult* result) {
+  const GBuffer& g = **frame;
+  const Box2i& from = g.data_window;
+  GBuffer out = without_planes(g);
+  out.data_window = window;
+  for (auto [in, cut_out] : {std::pair{&g.depth, &out.depth},
+                             {&g.normal, &out.normal},
+                             {&g.albedo, &out.albedo},
+                             {&g.direct, &out.direct},
+                             {&g.emission, &out.emission},
+                             {&g.motion_prev, &out.motion_prev},
+                             {&g.motion_next, &out.motion_next},
+                             {&g.beauty, &out.beauty}})
+    *cut_out = cut(*in, from, window);
+  for (Image* image : {&result->indirect, &result->gi, &result->composite, &result->coverage})
+    *image = cut(*image, from, window);
+  *frame = std::make_shared<const GBuffer>(std::move(out));
+}
+
 FrameError error_of(const Error& e) { return {e.kind(), e.file(), e.what()}; }
 
 [[noreturn]] void rethrow(const FrameError& e) { throw Error(e.kind, e.file, e.what); }
@@ -463,6 +492,7 @@ class Processor {
     }
     m->result = std::make_shared<FrameResult>(
         pipeline_.composite(*m->g, std::move(indirect), std::move(coverage)));
+    if (seq_.context) cut_to(seq_.data_window, &m->g, m->result.get());
   }
 
   void write(Made m) {

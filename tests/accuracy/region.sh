@@ -4,7 +4,8 @@
 # full frame gets over the same pixels. Per scene and region (each a quarter of the display
 # window: its centre and its four corner quadrants), the mean of `indirect` over the region in
 # a run on the cropped shot over the mean over the same pixels in a run on the whole shot, all
-# frames; 1 is the same light. Prints a markdown table. Not run by ctest.
+# frames; 1 is the same light: the crop alone, and the crop with the whole shot as its
+# --context. Prints a markdown table. Not run by ctest.
 # Usage: tests/accuracy/region.sh [BUILD_DIR] [-- extra ssgi options]
 # Environment: SSGI_REGION_SCENES (directories holding SCENE/SCENE.####.exr, default the two
 # sample scenes of ../shared/data; e.g. "$HOME/.cache/ssgi/training/plaza" adds a training scene).
@@ -21,7 +22,8 @@ mean_indirect() {
   done | awk '{ s += ($1 + $2 + $3) / 3; n++ } END { printf "%.6f", s / n }'
 }
 
-printf '| scene | region | mean indirect, region render / whole frame |\n|---|---|---|\n'
+printf '| scene | region | mean indirect, region render / whole frame | with --context |\n'
+printf '|---|---|---|---|\n'
 for dir in "${scenes[@]}"; do
   scene=$(basename "$dir")
   frames=("$dir/$scene".*.exr)
@@ -41,10 +43,13 @@ for dir in "${scenes[@]}"; do
       oiiotool "$f" --crop "$geom" -o "$out/crop.$n.exr"
       oiiotool "$out/whole.$n.exr" --crop "$geom" -o "$out/part.$n.exr"
     done
-    "$ssgi" run "$out/crop.####.exr" -o "$out/region.####.exr" -q --no-passthrough \
-      "${extra[@]}"
-    ratio=$(echo "$(mean_indirect "$out"/region.*.exr) / $(mean_indirect "$out"/part.*.exr)" |
-      bc -l)
-    printf '| %s | %s (%s) | %.3f |\n' "$scene" "$name" "$geom" "$ratio"
+    whole=$(mean_indirect "$out"/part.*.exr)
+    ratios=()
+    for context in "" "$dir/$scene.####.exr"; do
+      "$ssgi" run "$out/crop.####.exr" -o "$out/region.####.exr" -q --no-passthrough \
+        ${context:+--context "$context"} "${extra[@]}"
+      ratios+=("$(echo "$(mean_indirect "$out"/region.*.exr) / $whole" | bc -l)")
+    done
+    printf '| %s | %s (%s) | %.3f | %.3f |\n' "$scene" "$name" "$geom" "${ratios[@]}"
   done
 done

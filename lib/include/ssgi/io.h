@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,10 @@ struct InputOptions {
   // derivatives), empty or "auto" (the pass when the file has one, else from depth).
   std::string normals;
   CameraOptions camera;  // --fov, --camera
+  // --context: the pattern of the whole picture's frames around a region render (the same
+  // shot and display window, a data window holding this one's); their passes fill what the
+  // data window lacks, so that rays leaving it meet what the whole frame shows. Empty: none.
+  std::string context;
 };
 
 // A sequence as found on disk, probed from its first frame.
@@ -44,6 +49,12 @@ struct SequenceInfo {
   Layout layout;          // resolved against the first frame
   double pixel_aspect = 1.0;
   bool normals_from_depth = false;  // --normals: the reader derives normals from depth
+  // --context: the context's frames as probed from their first (its frames those of this
+  // sequence); the G-buffers read cover its data window. Null without --context.
+  std::shared_ptr<const SequenceInfo> context;
+
+  // The window the G-buffers read cover: the context's data window, else the data window.
+  const Box2i& working_window() const { return context ? context->data_window : data_window; }
 };
 
 // Resolves frames and probes the first one. Throws Error(kUsage) for a malformed pattern or

@@ -331,6 +331,40 @@ void set_io_threads(int threads) {
   OIIO::attribute("exr_threads", threads);
 }
 
+namespace {
+
+std::string corners(const Box2i& b) {
+  return "(" + std::to_string(b.x0) + "," + std::to_string(b.y0) + ")-(" +
+         std::to_string(b.x1 - 1) + "," + std::to_string(b.y1 - 1) + ")";
+}
+
+// --context: the whole picture's frames, probed from the one matching `seq`'s first frame with
+// the same reading options; its frames are `seq`'s. Throws Error(kInput) naming the context's
+// file when its display window is not `seq`'s or its data window does not hold `seq`'s.
+std::shared_ptr<const SequenceInfo> open_context(const SequenceInfo& seq,
+                                                 const InputOptions& options) {
+  InputOptions c = options;
+  c.pattern = options.context;
+  c.context.clear();
+  c.frames = std::to_string(seq.frames.front());
+  c.skip_missing = false;
+  auto context = std::make_shared<SequenceInfo>(open_sequence(c));
+  const std::string first = context->pattern.path_for(seq.frames.front());
+  if (context->display_window != seq.display_window)
+    throw_input(first, "--context: display window " + corners(context->display_window) +
+                           " is not the input's " + corners(seq.display_window));
+  const Box2i& cw = context->data_window;
+  const Box2i& dw = seq.data_window;
+  if (dw.x0 < cw.x0 || dw.y0 < cw.y0 || dw.x1 > cw.x1 || dw.y1 > cw.y1)
+    throw_input(first, "--context: data window " + corners(cw) + " does not hold the input's " +
+                           corners(dw));
+  context->frames = seq.frames;
+  context->frames_on_disk = seq.frames_on_disk;
+  return context;
+}
+
+}  // namespace
+
 SequenceInfo open_sequence(const InputOptions& options) {
   SequenceInfo seq;
   std::vector<int> frames_in_name;
@@ -395,10 +429,6 @@ SequenceInfo open_sequence(const InputOptions& options) {
   const Box2i& dw = seq.data_window;
   const Box2i& fw = seq.display_window;
   if (dw.x1 <= fw.x0 || dw.x0 >= fw.x1 || dw.y1 <= fw.y0 || dw.y0 >= fw.y1) {
-    auto corners = [](const Box2i& b) {
-      return "(" + std::to_string(b.x0) + "," + std::to_string(b.y0) + ")-(" +
-             std::to_string(b.x1 - 1) + "," + std::to_string(b.y1 - 1) + ")";
-    };
     throw_input(first, "data window " + corners(dw) + " lies wholly outside the display window " +
                            corners(fw) + ": none of its pixels is in the picture");
   }
@@ -432,6 +462,7 @@ SequenceInfo open_sequence(const InputOptions& options) {
       // No camera at all: reading the frame reports it.
     }
   }
+  if (!options.context.empty()) seq.context = open_context(seq, options);
   return seq;
 }
 
@@ -574,6 +605,60 @@ GBuffer convert_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
   return g;
 }
 
+// `region`'s passes pasted into those of `context` (the same frame of the whole picture), which
+// cover the context's data window: the region's own pixels where it has them, the context's
+// around them. Normals from depth are derived again over the whole, so that the region's edge
+// takes its neighbours outside. The region's path, camera and counts stay.
+GBuffer embed_in_context(const SequenceInfo& seq, GBuffer region, GBuffer context) {
+  const std::string& path = context.path;
+  const auto paste = [&](Image& from, Image& into, const char* what) {
+    if (from.empty()) {
+      into = Image();
+      return;
+    }
+    if (into.channels() != from.channels())
+      throw_input(path, std::string("--context: its ") + what + " has " +
+                            std::to_string(into.channels()) + " channels, the input's " +
+                            std::to_string(from.channels()));
+    copy_window(from, region.data_window, &into, context.data_window);
+    from = Image();
+  };
+  paste(region.depth, context.depth, "depth");
+  if (seq.normals_from_depth && !region.normal.empty()) {
+    region.normal = Image();
+    context.normal = detail::normals_from_depth(context.depth, region.camera,
+                                                context.display_window, context.data_window);
+  } else {
+    paste(region.normal, context.normal, "normal");
+  }
+  paste(region.albedo, context.albedo, "albedo");
+  paste(region.direct, context.direct, "direct light");
+  paste(region.emission, context.emission, "emission");
+  paste(region.motion_prev, context.motion_prev, "motion");
+  paste(region.motion_next, context.motion_next, "motion");
+  paste(region.beauty, context.beauty, "beauty");
+  region.data_window = context.data_window;
+  region.depth = std::move(context.depth);
+  region.normal = std::move(context.normal);
+  region.albedo = std::move(context.albedo);
+  region.direct = std::move(context.direct);
+  region.emission = std::move(context.emission);
+  region.motion_prev = std::move(context.motion_prev);
+  region.motion_next = std::move(context.motion_next);
+  region.beauty = std::move(context.beauty);
+  return region;
+}
+
+// With --context, `g` embedded in its frame of the whole picture.
+GBuffer with_context(const SequenceInfo& seq, int frame, RoleMask roles,
+                     const InputOptions& options, const ColorManagement* color, GBuffer g,
+                     bool report) {
+  if (!seq.context) return g;
+  GBuffer context =
+      detail::read_input_frame(*seq.context, frame, roles, options, color, false, report).g;
+  return embed_in_context(seq, std::move(g), std::move(context));
+}
+
 }  // namespace
 
 namespace detail {
@@ -591,6 +676,8 @@ InputFrame read_input_frame(const SequenceInfo& seq, int frame, RoleMask roles,
       read_float_channels(*in, subimage, targets, seq.data_window, path);
   };
   GBuffer g = convert_gbuffer(seq, frame, roles, options, color, *input, fill, report);
+  in.reset();
+  g = with_context(seq, frame, roles, options, color, std::move(g), report);
   return {std::move(g), std::move(input)};
 }
 
@@ -600,7 +687,8 @@ GBuffer gbuffer_from_input(const SequenceInfo& seq, int frame, RoleMask roles,
   const FillChannels fill = [&](int subimage, const std::vector<PlaneTarget>& targets) {
     float_channels_from(input, subimage, targets, seq.data_window);
   };
-  return convert_gbuffer(seq, frame, roles, options, color, input, fill, true);
+  return with_context(seq, frame, roles, options, color,
+                      convert_gbuffer(seq, frame, roles, options, color, input, fill, true), true);
 }
 
 }  // namespace detail
