@@ -550,6 +550,16 @@ TEST_F(Cli, AContextThatDoesNotHoldTheRegionIsRefused) {
     expect_one_error(r, context, phrase);
     EXPECT_FALSE(fs::exists(path("out.0001.exr")));
   }
+  // Another frame of a panning shot: its camera is not the region's.
+  fs::copy_file(testdata("pan/pan.0003.exr"), path("moved.0001.exr"));
+  ASSERT_TRUE(OIIO::ImageBufAlgo::crop(OIIO::ImageBuf(testdata("pan/pan.0001.exr")),
+                                       OIIO::ROI(8, 40, 8, 40))
+                  .write(path("pan_crop.0001.exr")));
+  const CliResult moved = run_ssgi({"run", path("pan_crop.0001.exr"), "--context",
+                                    path("moved.0001.exr"), "-o", path("out.0001.exr")});
+  EXPECT_EQ(moved.exit_code, 3) << moved.err;
+  expect_one_error(moved, path("moved.0001.exr"), "camera is not the input's frame 1 camera");
+  EXPECT_FALSE(fs::exists(path("out.0001.exr")));
   const CliResult missing = run_ssgi({"run", testdata("crop/crop.0001.exr"), "--context",
                                       path("none.####.exr"), "-o", path("out.0001.exr")});
   EXPECT_EQ(missing.exit_code, 4) << missing.err;

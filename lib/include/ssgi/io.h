@@ -69,7 +69,9 @@ SequenceInfo open_sequence(const InputOptions& options);
 // direct, emission, beauty's R, G, B) go from the input space to the working space before
 // anything else (direct x albedo included); data passes are never transformed. Throws
 // Error(kIO) for an unreadable file and Error(kInput) naming it for unusable data (missing
-// channel, window or resolution that differs from `sequence`, no camera).
+// channel, window or resolution that differs from `sequence`, no camera). With a context
+// (sequence.context), the frame is pasted over the context's same frame and covers the
+// context's data window; a context frame whose camera differs is Error(kInput) naming it.
 GBuffer read_gbuffer(const SequenceInfo& sequence, int frame, RoleMask roles,
                      const InputOptions& options, const ColorManagement* color = nullptr);
 

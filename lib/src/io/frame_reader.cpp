@@ -611,6 +611,20 @@ GBuffer convert_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
 // takes its neighbours outside. The region's path, camera and counts stay.
 GBuffer embed_in_context(const SequenceInfo& seq, GBuffer region, GBuffer context) {
   const std::string& path = context.path;
+  // The same frame of the same shot sees through the same camera (to float precision, as
+  // headers written by two renders of it may round differently).
+  const auto near = [](double a, double b) {
+    return std::fabs(a - b) <= 1e-4 * (1 + std::fabs(a));
+  };
+  const Camera &a = region.camera, &b = context.camera;
+  bool same = near(a.fx, b.fx) && near(a.fy, b.fy) && near(a.cx, b.cx) && near(a.cy, b.cy) &&
+              a.has_world_transform == b.has_world_transform;
+  for (int i = 0; i < 4 && same; ++i)
+    for (int j = 0; j < 4; ++j)
+      same = same && near(a.world_to_camera.m[i][j], b.world_to_camera.m[i][j]);
+  if (!same)
+    throw_input(path, "--context: its camera is not the input's frame " +
+                          std::to_string(region.frame) + " camera (not the same shot and frame?)");
   const auto paste = [&](Image& from, Image& into, const char* what) {
     if (from.empty()) {
       into = Image();
