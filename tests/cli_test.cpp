@@ -528,6 +528,23 @@ TEST_F(Cli, ARegionRenderWithItsContextGetsTheWholeFramesLight) {
   // The crop alone lacks the walls around it (far outside issue 11's 25%).
   EXPECT_GT(whole_sum, 0.1 * 6 * 48 * 32);
   EXPECT_LT(alone_sum, 0.5 * whole_sum);
+
+  // One frame re-rendered alone: its temporal window's neighbours come from the context.
+  fs::create_directory(path("lone"));
+  fs::copy_file(path("crop.0003.exr"), path("lone/fix.0003.exr"));
+  const CliResult lone = run_ssgi({"run", path("lone/fix.0003.exr"), "--context", whole_pattern,
+                                   "-o", path("lone/out.####.exr"), "-v"});
+  ASSERT_EQ(lone.exit_code, 0) << lone.err;
+  EXPECT_NE(lone.err.find("temporal: symmetric window"), std::string::npos) << lone.err;
+  const ExrImage whole = read_exr(path("whole.0003.exr"));
+  const ExrImage got = read_exr(path("lone/out.0003.exr"));
+  for (const std::string& c : kOurChannels) {
+    int differ = 0;
+    for (int y = 0; y < 32; ++y)
+      for (int x = 0; x < 48; ++x)
+        differ += got.planes.at(c)[y * 48 + x] != whole.planes.at(c)[(y + 16) * 96 + x + 24];
+    EXPECT_EQ(differ, 0) << "a lone frame, " << c;
+  }
 }
 
 // A context that is not the region's whole picture is refused before anything is written, with
@@ -548,6 +565,25 @@ TEST_F(Cli, AContextThatDoesNotHoldTheRegionIsRefused) {
         {"run", testdata("crop/crop.0001.exr"), "--context", context, "-o", path("out.0001.exr")});
     EXPECT_EQ(r.exit_code, 3) << r.err;
     expect_one_error(r, context, phrase);
+    EXPECT_FALSE(fs::exists(path("out.0001.exr")));
+  }
+  // Without a pass the region has.
+  {
+    std::vector<int> keep;
+    std::vector<std::string> names;
+    for (int c = 0; c < sample.nchannels(); ++c) {
+      const std::string name = sample.spec().channel_name(c);
+      if (name.find(".Emit.") != std::string::npos) continue;
+      keep.push_back(c);
+      names.push_back(name);
+    }
+    const OIIO::ImageBuf dark =
+        OIIO::ImageBufAlgo::channels(sample, static_cast<int>(keep.size()), keep, {}, names);
+    ASSERT_TRUE(dark.write(path("dark.0001.exr"))) << dark.geterror();
+    const CliResult r = run_ssgi({"run", testdata("crop/crop.0001.exr"), "--context",
+                                  path("dark.0001.exr"), "-o", path("out.0001.exr")});
+    EXPECT_EQ(r.exit_code, 3) << r.err;
+    expect_one_error(r, path("dark.0001.exr"), "has no emission channels, which the input has");
     EXPECT_FALSE(fs::exists(path("out.0001.exr")));
   }
   // Another frame of a panning shot: its camera is not the region's.

@@ -181,7 +181,10 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
   const double motion = (plan.roles & role_bit(Role::kMotion)) ? 4 : 0;
   std::uint64_t input_channels = 0;
   for (const auto& c : seq.channels.channels) input_channels += c.size();
-  const std::uint64_t native = write.passthrough ? planes(input_channels, pixels) : 0;
+  // The input's own pixels cover its data window (with --context, smaller than the passes').
+  const std::uint64_t own_pixels =
+      static_cast<std::uint64_t>(seq.data_window.width()) * seq.data_window.height();
+  const std::uint64_t native = write.passthrough ? planes(input_channels, own_pixels) : 0;
   const std::uint64_t strip = 16 * kMiB;
   std::uint64_t frame = planes(read, pixels) + native + strip;
   if (read_twice) {
@@ -201,8 +204,12 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
     waiting = read_twice ? 0 : s.temporal_radius;
   }
   if (plan.temporal == TemporalMode::kEma) ring_frames = 2;
-  const std::uint64_t ring = ring_frames * frame_grid +
-                             waiting * (write.passthrough ? native : planes(read - motion, pixels));
+  // With --context a waiting frame keeps its passes beside its pixels (converting them again
+  // would decode the context again).
+  const std::uint64_t passes = planes(read - motion, pixels);
+  const std::uint64_t ring = ring_frames * frame_grid + waiting * (!write.passthrough ? passes
+                                                                   : seq.context ? native + passes
+                                                                                 : native);
 
   // Tracing: the reflected light and the trace grid (10 planes and origins), the tracer's
   // hits, then the bounces' light (4 + 3 + 3 planes).

@@ -79,7 +79,8 @@ std::string settings_text(const RunOptions& o, const SequenceInfo& seq) {
     add("fov", fov);
   }
   if (!o.input.camera.sidecar.empty()) add("camera", o.input.camera.sidecar);
-  if (seq.context) add("context", o.input.context);
+  // Which frames the context is, like which frames the input is, is data, not a setting.
+  if (seq.context) add("context", "yes");
   add("compression", o.write.compression);
   add("datatype", o.write.half ? "half" : "float");
   add("passthrough", o.write.passthrough ? "yes" : "no");

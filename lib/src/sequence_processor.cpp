@@ -387,7 +387,9 @@ class Processor {
       // and its passes unless they can be converted again from those pixels. Motion only
       // served the trace grid, which the ring holds.
       lit.input = frame.input;
-      if (!job_.keep_input_pixels || s.read == n) {
+      // With a context the passes are kept too: converting them again would decode the
+      // context's file again.
+      if (!job_.keep_input_pixels || s.read == n || seq_.context) {
         frame.g.motion_prev = Image();
         frame.g.motion_next = Image();
         lit.g = std::make_shared<const GBuffer>(std::move(frame.g));

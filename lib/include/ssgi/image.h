@@ -1,7 +1,6 @@
 // Pixel windows and planar float images, the storage every stage works on.
 #pragma once
 
-#include <algorithm>
 #include <cassert>
 #include <cstddef>
 #include <vector>
@@ -59,25 +58,5 @@ class Image {
   int width_ = 0, height_ = 0, channels_ = 0;
   std::vector<float> data_;
 };
-
-// Copies every plane of `src`, whose pixels cover `src_window`, into `dst`, covering
-// `dst_window`, where the two windows overlap; the rest of `dst` is left as it is. Both have the
-// same number of channels.
-inline void copy_window(const Image& src, const Box2i& src_window, Image* dst,
-                        const Box2i& dst_window) {
-  assert(src.channels() == dst->channels());
-  const int x0 = std::max(src_window.x0, dst_window.x0),
-            x1 = std::min(src_window.x1, dst_window.x1);
-  const int y0 = std::max(src_window.y0, dst_window.y0),
-            y1 = std::min(src_window.y1, dst_window.y1);
-  if (x1 <= x0 || y1 <= y0) return;
-  for (int c = 0; c < src.channels(); ++c)
-    for (int y = y0; y < y1; ++y)
-      std::copy_n(src.plane(c) + static_cast<std::size_t>(y - src_window.y0) * src.width() +
-                      (x0 - src_window.x0),
-                  x1 - x0,
-                  dst->plane(c) + static_cast<std::size_t>(y - dst_window.y0) * dst->width() +
-                      (x0 - dst_window.x0));
-}
 
 }  // namespace ssgi

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <functional>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <memory>
@@ -348,8 +349,24 @@ std::shared_ptr<const SequenceInfo> open_context(const SequenceInfo& seq,
   c.context.clear();
   c.frames = std::to_string(seq.frames.front());
   c.skip_missing = false;
-  auto context = std::make_shared<SequenceInfo>(open_sequence(c));
+  std::shared_ptr<SequenceInfo> context;
+  try {
+    context = std::make_shared<SequenceInfo>(open_sequence(c));
+  } catch (const Error& e) {
+    throw Error(e.kind(), e.file(),
+                "--context: " + std::string(e.what()) + " (the input's first frame is " +
+                    std::to_string(seq.frames.front()) + ")");
+  }
   const std::string first = context->pattern.path_for(seq.frames.front());
+  // The same shot's frames have the same passes.
+  for (int r = 0; r < kRoleCount; ++r) {
+    const Role role = static_cast<Role>(r);
+    // Positions are never read; normals from depth need none.
+    if (role == Role::kPosition || (role == Role::kNormal && seq.normals_from_depth)) continue;
+    if (seq.layout.has(role) && !context->layout.has(role))
+      throw_input(first, std::string("--context: has no ") + role_name(role) +
+                             " channels, which the input has");
+  }
   if (context->display_window != seq.display_window)
     throw_input(first, "--context: display window " + corners(context->display_window) +
                            " is not the input's " + corners(seq.display_window));
@@ -359,7 +376,6 @@ std::shared_ptr<const SequenceInfo> open_context(const SequenceInfo& seq,
     throw_input(first, "--context: data window " + corners(cw) + " does not hold the input's " +
                            corners(dw));
   context->frames = seq.frames;
-  context->frames_on_disk = seq.frames_on_disk;
   return context;
 }
 
@@ -462,7 +478,16 @@ SequenceInfo open_sequence(const InputOptions& options) {
       // No camera at all: reading the frame reports it.
     }
   }
-  if (!options.context.empty()) seq.context = open_context(seq, options);
+  if (!options.context.empty()) {
+    seq.context = open_context(seq, options);
+    // The temporal stage's neighbours are the whole shot's: a frame the region lacks is read
+    // from the context alone.
+    std::vector<int> both;
+    std::set_union(seq.frames_on_disk.begin(), seq.frames_on_disk.end(),
+                   seq.context->frames_on_disk.begin(), seq.context->frames_on_disk.end(),
+                   std::back_inserter(both));
+    seq.frames_on_disk = std::move(both);
+  }
   return seq;
 }
 
@@ -634,7 +659,7 @@ GBuffer embed_in_context(const SequenceInfo& seq, GBuffer region, GBuffer contex
       throw_input(path, std::string("--context: its ") + what + " has " +
                             std::to_string(into.channels()) + " channels, the input's " +
                             std::to_string(from.channels()));
-    copy_window(from, region.data_window, &into, context.data_window);
+    detail::copy_window(from, region.data_window, &into, context.data_window);
     from = Image();
   };
   paste(region.depth, context.depth, "depth");
@@ -681,6 +706,11 @@ InputFrame read_input_frame(const SequenceInfo& seq, int frame, RoleMask roles,
                             const InputOptions& options, const ColorManagement* color,
                             bool keep_pixels, bool report) {
   const std::string path = seq.pattern.path_for(frame);
+  // A neighbour of the temporal stage that only the context has: its whole picture. (A frame
+  // to write is the region's: its file missing now is an error below.)
+  if (seq.context && std::find(seq.frames.begin(), seq.frames.end(), frame) == seq.frames.end() &&
+      !fs::exists(path))
+    return read_input_frame(*seq.context, frame, roles, options, color, false, report);
   auto in = open_exr(path);
   auto input = std::make_shared<DecodedInput>(decode_input(*in, path, keep_pixels));
   const FillChannels fill = [&](int subimage, const std::vector<PlaneTarget>& targets) {
