@@ -63,7 +63,7 @@ for name in "${scenes[@]}"; do
     continue
   fi
   tmp=$(mktemp -d "$cache/.$name.XXXXXX")
-  echo "$name: rendering $frames frames at $samples samples (log: $tmp/blender.log)" >&2
+  echo "$name: rendering $frames frames at $samples samples or more (log: $tmp/blender.log)" >&2
   start=$(date +%s)
   blender_run --scene "$name" --out "$tmp" --samples "$samples" --frames "$frames" \
     > "$tmp/blender.log" 2>&1 || {
@@ -72,7 +72,9 @@ for name in "${scenes[@]}"; do
   }
   add_cameras "$tmp" "$name"
   complete "$tmp" "$name" || { echo "render.sh: $name: incomplete output in $tmp" >&2; exit 1; }
-  echo "$samples samples, $(( ($(date +%s) - start) / frames )) s/frame" > "$tmp/render.txt"
+  # The samples as rendered (scenes.py raises them for scenes whose truth needs more).
+  spp=$(python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["spp"])' "$tmp/camera.json")
+  echo "$spp samples, $(( ($(date +%s) - start) / frames )) s/frame" > "$tmp/render.txt"
   echo "$name: $(cat "$tmp/render.txt")" >&2
   rm -f "$tmp/blender.log"
   chmod 755 "$tmp"
