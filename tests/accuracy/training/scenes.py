@@ -6,12 +6,13 @@ Usage (Blender 3.4, headless):
 
 Builds scene NAME from primitives only (no assets), renders frames 1..N (default 8) into
 DIR/NAME.####.exr (Cycles CPU, N samples per pixel, default 256, times the scene's
-SAMPLES_FACTOR; no adaptive sampling, no denoising, 320x180, multilayer 32-bit float ZIP
-EXR, view layer "ViewLayer" with the passes of ../shared/data) and writes DIR/camera.json in the sample's format, including each frame's
-OpenEXR worldToCamera and worldToNDC (camera_matrices.py). Stock Blender does not put those in
-the headers: render.sh adds them afterwards. --list prints the scene names and what each one
-exercises (SCENE<TAB>name<TAB>description; Blender prints other lines too), --no-render
-writes camera.json only.
+SAMPLES_FACTOR; no adaptive sampling, no denoising, 320x180, multilayer 32-bit float ZIP EXR,
+view layer "ViewLayer" with the passes of ../shared/data) and writes DIR/camera.json in the
+sample's format, including each frame's OpenEXR worldToCamera and worldToNDC
+(camera_matrices.py). Stock Blender does not put those in the headers: render.sh adds them
+afterwards. --list prints the scene names and what each one exercises
+(SCENE<TAB>name<TAB>description; Blender prints other lines too), --no-render writes
+camera.json only.
 Materials are pure diffuse (Diffuse BSDF) with varied albedo; emitters are Emission shaders.
 """
 
