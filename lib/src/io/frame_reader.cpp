@@ -676,16 +676,11 @@ GBuffer embed_in_context(const SequenceInfo& seq, GBuffer region, GBuffer contex
   paste(region.motion_prev, context.motion_prev, "motion");
   paste(region.motion_next, context.motion_next, "motion");
   paste(region.beauty, context.beauty, "beauty");
-  region.data_window = context.data_window;
-  region.depth = std::move(context.depth);
-  region.normal = std::move(context.normal);
-  region.albedo = std::move(context.albedo);
-  region.direct = std::move(context.direct);
-  region.emission = std::move(context.emission);
-  region.motion_prev = std::move(context.motion_prev);
-  region.motion_next = std::move(context.motion_next);
-  region.beauty = std::move(context.beauty);
-  return region;
+  // The frame is the region's, over the context's window.
+  context.path = std::move(region.path);
+  context.camera = std::move(region.camera);
+  context.sanitized = region.sanitized;
+  return context;
 }
 
 // With --context, `g` embedded in its frame of the whole picture.
