@@ -770,6 +770,74 @@ TEST(Pipeline, TheMissModelClosesAClosedBox) {
   }
 }
 
+// The temporal window makes the miss model's colours its frames' mean. Three frames of the
+// closed box, lit D = 0.2, 0.5 and 1.1 (direct light includes the albedo here): with one bounce
+// each ray brings D, from a face it hits or from the cube (whose colours are the border's light,
+// D), so a frame's light is D everywhere and its coverage the share its hits brought. Levelled,
+// the misses bring the window's mean, 0.6: D x coverage + 0.6 x (1 - coverage), at every sample.
+TEST(Pipeline, TheWindowGivesItsFramesTheMeanColoursOfTheirMisses) {
+  GiSettings s;
+  s.bounces = 1;
+  s.miss = MissMode::kAuto;
+  s.denoise = DenoiseMode::kNone;
+  s.temporal = TemporalMode::kWindow;
+  s.trace_scale = 1;
+  Frame f = blank_scene(s, 120.0, 0.0f);
+  GBuffer& g = f.g;
+  const int w = g.width(), h = g.height();
+  const Camera& cam = g.camera;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const double r[3] = {(x + 0.5 - cam.cx) / cam.fx, (cam.cy - (y + 0.5)) / cam.fy, 1.0};
+      int axis = 2;
+      for (int a = 0; a < 2; ++a)
+        if (std::fabs(r[a]) > std::fabs(r[axis])) axis = a;
+      g.depth.at(0, x, y) = static_cast<float>(1.0 / std::fabs(r[axis]));
+      g.normal.at(axis, x, y) = r[axis] > 0 ? -1.0f : 1.0f;
+    }
+  f.seq.frames_on_disk = {1, 2, 3};  // a shot, so that the plan has a window
+  const float lit[3] = {0.2f, 0.5f, 1.1f};
+  const float mean = (lit[0] + lit[1] + lit[2]) / 3;
+  for (Tracer tracer : kTracers) {
+    SCOPED_TRACE(tracer_name(tracer));
+    s.tracer = tracer;
+    const Pipeline pipeline(f.seq, s);
+    ASSERT_EQ(pipeline.plan().temporal, TemporalMode::kWindow);
+    std::vector<Pipeline::TracedLight> traced;
+    for (int k = 0; k < 3; ++k) {
+      GBuffer frame = g;
+      frame.frame = k + 1;
+      frame.direct = Image(w, h, 3, lit[k]);
+      traced.push_back(pipeline.trace_light(frame));
+      for (int group = 0; group < 3; ++group)
+        ASSERT_NEAR(traced.back().miss_colours[group][1], lit[k], 1e-5f * lit[k]) << group;
+    }
+    const std::vector<Image> levelled =
+        pipeline.window_lights({&traced[0], &traced[1], &traced[2]});
+    ASSERT_EQ(levelled.size(), 3u);
+    for (int k = 0; k < 3; ++k) {
+      const Image& cov = traced[k].coverage;
+      double missed = 0;
+      int samples = 0;
+      for (std::size_t p = 0; p < cov.plane_size(); ++p) {
+        const float c = cov.plane(0)[p];
+        if (c < 0) continue;
+        const float want = lit[k] * c + mean * (1 - c);
+        for (int ch = 0; ch < 3; ++ch) {
+          // The box's faces are enclosed to within a per cent (the rest of a miss is black).
+          ASSERT_NEAR(traced[k].light.plane(ch)[p], lit[k], 0.01f * lit[k]) << "frame " << k;
+          ASSERT_NEAR(levelled[k].plane(ch)[p], want, 0.01f * std::max(lit[k], mean))
+              << "frame " << k << " at " << p;
+        }
+        missed += 1 - c;
+        ++samples;
+      }
+      // The box's misses are not a token share: the frame's edges send most rays off screen.
+      EXPECT_GT(missed / samples, 0.1) << "frame " << k;
+    }
+  }
+}
+
 // A wall facing the camera over a lit ground, sky above (background) and no world transform (up
 // is camera +y). The model sees sky above the wall and ground below, enclosed only downwards
 // (and forwards, by the wall): upward misses go to the (black) sky, and under that open sky the

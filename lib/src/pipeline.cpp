@@ -13,6 +13,7 @@
 #include "march.h"
 #include "misses.h"
 #include "multiframe.h"
+#include "parallel.h"
 #include "reference.h"
 #include "slices.h"
 #include "ssgi/error.h"
@@ -209,8 +210,10 @@ struct Pipeline::Impl {
   // Tracing, misses and bounces on the trace grid: the light before the denoiser, and, when
   // `grid_out` is given, the grid as a G-buffer for the temporal stage, when `coverage` is, the
   // coverage there (gather_bounces), when `keep` is (multiframe), what continuing rays needs.
+  // With `cube` and `shares`, the last bounce's cube colours and the samples' shares of them.
   Image trace(const GBuffer& g, GBuffer* grid_out, Image* coverage,
-              std::shared_ptr<detail::FrameTrace>* keep = nullptr) const;
+              std::shared_ptr<detail::FrameTrace>* keep = nullptr,
+              detail::CubeLight* cube = nullptr, Image* shares = nullptr) const;
 
   // Traced light on the trace grid denoised there (the pyramid from the grid's level), when
   // the plan denoises: TracedLight::light.
@@ -278,7 +281,8 @@ int pyramid_level(int scale) {
 }  // namespace
 
 Image Pipeline::Impl::trace(const GBuffer& g, GBuffer* grid_out, Image* coverage,
-                            std::shared_ptr<detail::FrameTrace>* keep) const {
+                            std::shared_ptr<detail::FrameTrace>* keep, detail::CubeLight* cube,
+                            Image* shares) const {
   const GiSettings& s = settings;
   const Image reflected = detail::reflected_radiance(g, plan.gather_emission);
   detail::TraceGrid grid =
@@ -289,23 +293,26 @@ Image Pipeline::Impl::trace(const GBuffer& g, GBuffer* grid_out, Image* coverage
   switch (s.tracer) {
     case Tracer::kReference: {
       const detail::ReferenceHits hits(g, s, misses, memory.reference_hits_bytes);
-      return detail::gather_bounces(grid, hits, s.bounces, misses, coverage);
+      Image light = detail::gather_bounces(grid, hits, s.bounces, misses, coverage, cube);
+      if (shares) *shares = hits.cube();
+      return light;
     }
     case Tracer::kScreenSpace: {
       // The march's rays are freed before the bounces.
-      const detail::WeightedHits hits =
+      detail::WeightedHits hits =
           detail::weighted_from_rays(grid, detail::march_screen_space(g, s, misses));
-      return detail::gather_bounces(grid, hits, s.bounces, misses, coverage);
+      Image light = detail::gather_bounces(grid, hits, s.bounces, misses, coverage, cube);
+      if (shares) *shares = std::move(hits.cube);
+      return light;
     }
     case Tracer::kSlices:
       break;
   }
-  if (!keep)
-    return detail::gather_bounces(grid, detail::trace_slices(g, grid, s, misses), s.bounces, misses,
-                                  coverage);
   detail::MissedRays missed;
-  detail::WeightedHits hits = detail::trace_slices(g, grid, s, misses, &missed);
-  Image light = detail::gather_bounces(grid, hits, s.bounces, misses, coverage);
+  detail::WeightedHits hits = detail::trace_slices(g, grid, s, misses, keep ? &missed : nullptr);
+  Image light = detail::gather_bounces(grid, hits, s.bounces, misses, coverage, cube);
+  if (shares) *shares = hits.cube;
+  if (!keep) return light;
   *keep = std::make_shared<detail::FrameTrace>(g.frame, g.camera, std::move(grid), std::move(hits),
                                                misses, std::move(missed));
   return light;
@@ -320,9 +327,75 @@ Image Pipeline::Impl::denoise_on_grid(const GBuffer& g, Image light) const {
 
 Pipeline::TracedLight Pipeline::trace_light(const GBuffer& g) const {
   TracedLight out;
+  // The window levels the misses' colours over its frames (window_lights).
+  const bool window = impl_->plan.temporal == TemporalMode::kWindow;
+  detail::CubeLight cube{};
+  Image shares;
   out.light =
-      impl_->trace(g, &out.grid, &out.coverage, impl_->plan.multiframe > 0 ? &out.trace : nullptr);
+      impl_->trace(g, &out.grid, &out.coverage, impl_->plan.multiframe > 0 ? &out.trace : nullptr,
+                   window ? &cube : nullptr, window ? &shares : nullptr);
   out.light = impl_->denoise_on_grid(g, std::move(out.light));
+  if (shares.channels() != detail::kCubeFaces) return out;
+  // Three groups of faces, one plane each, so that one pass of the denoiser carries them: the
+  // sides (right, left, forward, back), up and down.
+  constexpr int kGroup[detail::kCubeFaces] = {0, 0, 1, 2, 0, 0};
+  Image grouped(shares.width(), shares.height(), 3);
+  double face_total[detail::kCubeFaces] = {};
+  for (int f = 0; f < detail::kCubeFaces; ++f) {
+    const float* in = shares.plane(f);
+    float* to = grouped.plane(kGroup[f]);
+    for (std::size_t p = 0; p < shares.plane_size(); ++p) {
+      to[p] += in[p];
+      face_total[f] += in[p];
+    }
+  }
+  for (int group = 0; group < 3; ++group) {
+    double weight = 0, colour[3] = {};
+    for (int f = 0; f < detail::kCubeFaces; ++f) {
+      if (kGroup[f] != group) continue;
+      weight += face_total[f];
+      for (int c = 0; c < 3; ++c) colour[c] += face_total[f] * cube[f][c];
+    }
+    for (int c = 0; c < 3; ++c)
+      out.miss_colours[group][c] = weight > 0 ? static_cast<float>(colour[c] / weight) : 0.0f;
+  }
+  // Denoised as the light is (the denoiser's weights do not depend on what it filters), so
+  // that a change of colours moves the denoised light as it would have moved the traced one.
+  out.miss_shares = impl_->denoise_on_grid(g, std::move(grouped));
+  return out;
+}
+
+std::vector<Image> Pipeline::window_lights(const std::vector<const TracedLight*>& window) const {
+  std::vector<Image> out;
+  double mean[3][3] = {};
+  int n = 0;
+  for (const TracedLight* t : window) {
+    if (t->miss_shares.empty()) continue;
+    for (int g = 0; g < 3; ++g)
+      for (int c = 0; c < 3; ++c) mean[g][c] += t->miss_colours[g][c];
+    ++n;
+  }
+  for (const TracedLight* t : window) {
+    Image light = t->light;
+    if (!t->miss_shares.empty()) {
+      float delta[3][3];
+      for (int g = 0; g < 3; ++g)
+        for (int c = 0; c < 3; ++c)
+          delta[g][c] = static_cast<float>(mean[g][c] / n - t->miss_colours[g][c]);
+      detail::parallel_for_rows(light.height(), [&](int y) {
+        const std::size_t row = static_cast<std::size_t>(y) * light.width();
+        for (int x = 0; x < light.width(); ++x) {
+          const std::size_t s = row + x;
+          for (int c = 0; c < 3; ++c) {
+            float d = 0;
+            for (int g = 0; g < 3; ++g) d += t->miss_shares.plane(g)[s] * delta[g][c];
+            light.plane(c)[s] = std::max(light.plane(c)[s] + d, 0.0f);
+          }
+        }
+      });
+    }
+    out.push_back(std::move(light));
+  }
   return out;
 }
 

@@ -418,8 +418,8 @@ class Processor {
     Image indirect, coverage;
     if (mode_ == TemporalMode::kWindow) {
       std::vector<const GBuffer*> frames;
-      std::vector<const Image*> light;
-      std::vector<const Pipeline::TracedLight*> traced;  // those multiframe reads
+      std::vector<const Pipeline::TracedLight*> lit_frames;  // the window's, as lit
+      std::vector<const Pipeline::TracedLight*> traced;      // those multiframe reads
       int center = -1, traced_center = -1;
       for (int f : seq_.frames_on_disk) {
         if (std::abs(f - n) > radius_) continue;
@@ -438,7 +438,7 @@ class Processor {
           traced_center = static_cast<int>(traced.size());
         }
         frames.push_back(&it->second.traced.grid);
-        light.push_back(&it->second.traced.light);
+        lit_frames.push_back(&it->second.traced);
         if (std::abs(f - n) <= pipeline_.plan().multiframe) traced.push_back(&it->second.traced);
       }
       Lit& lit = ring_.at(n);
@@ -455,6 +455,10 @@ class Processor {
             gbuffer_from_input(seq_, n, roles, *job_.input, &pipeline_.color(), *lit.input));
         *convert_ms += ms_since(start);
       }
+      // Each frame's light with the misses' colours the window's mean, then filtered.
+      const std::vector<Image> levelled = pipeline_.window_lights(lit_frames);
+      std::vector<const Image*> light;
+      for (const Image& l : levelled) light.push_back(&l);
       Image filtered = temporal_window(frames, light, center, radius_);
       Image continued, continued_coverage;
       const bool multiframe =

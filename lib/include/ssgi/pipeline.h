@@ -2,6 +2,7 @@
 // composite.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <memory>
 #include <string>
@@ -87,8 +88,21 @@ class Pipeline {
     Image coverage;  // 1 channel, the grid's size: FrameResult::coverage there (-1: no surface)
     // With Plan::multiframe, what continuing its rays and being continued in needs.
     std::shared_ptr<detail::FrameTrace> trace;
+    // The temporal window's: the colours the miss model's cube (lib/src/gi/misses.h) gave the
+    // last bounce's misses heading sideways, up and down (RGB each; the sides' four faces
+    // weighted by their shares over the frame), and each trace sample's shares of those three,
+    // denoised as the light is (3 channels; empty when the plan has no window).
+    std::array<std::array<float, 3>, 3> miss_colours{};
+    Image miss_shares;
   };
   TracedLight trace_light(const GBuffer& frame) const;
+
+  // The temporal window's lights (TracedLight::light of each of `window`) with the miss model's
+  // colours of the last bounce made the window's mean: each frame's light plus its cube shares
+  // x (the mean colours - its own). A frame's border shows other surroundings as the view
+  // moves; the window's frames together show more, and agree. Frames without shares are as
+  // they are.
+  std::vector<Image> window_lights(const std::vector<const TracedLight*>& window) const;
 
   // Plan::multiframe: TracedLight::light and ::coverage of window[center] (frame `frame`) with
   // its missed rays continued in the other frames of `window` (TracedLight of each, ascending

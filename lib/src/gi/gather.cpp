@@ -159,8 +159,6 @@ class HeldHits final : public HitSource {
   const WeightedHits& hits_;
 };
 
-using CubeLight = std::array<std::array<float, 3>, kCubeFaces>;
-
 // One gather: the light `radiance(hit)` of every hit, plus the misses' environment light and
 // their cube shares x the cube's colours; with `coverage`, the hits' share of it there
 // (gather_bounces).
@@ -225,8 +223,8 @@ Image gather_once(const TraceGrid& grid, const HitSource& hits, const Radiance& 
 }  // namespace
 
 Image gather_bounces(const TraceGrid& grid, const WeightedHits& hits, int bounces,
-                     const MissModel& misses, Image* coverage) {
-  return gather_bounces(grid, HeldHits(grid, hits), bounces, misses, coverage);
+                     const MissModel& misses, Image* coverage, CubeLight* last_cube) {
+  return gather_bounces(grid, HeldHits(grid, hits), bounces, misses, coverage, last_cube);
 }
 
 Image coverage_to_frame(const Image& grid_coverage, const Image& grid_depth,
@@ -308,7 +306,7 @@ Image coverage_to_frame(const Image& grid_coverage, const Image& grid_depth,
 }
 
 Image gather_bounces(const TraceGrid& grid, const HitSource& hits, int bounces,
-                     const MissModel& misses, Image* coverage) {
+                     const MissModel& misses, Image* coverage, CubeLight* last_cube) {
   // Each bounce's light per trace sample, packed RGB_ so that a hit is one 16-byte load: at 2 s
   // the light of its front (what it reflects plus albedo x its indirect light), at 2 s + 1 that
   // of its unseen back (albedo x indirect only), which hits from behind bring (surface_model.h).
@@ -322,8 +320,8 @@ Image gather_bounces(const TraceGrid& grid, const HitSource& hits, int bounces,
         light[2 * static_cast<std::size_t>(hit_pixel(hit)) + (hit >= kSeenFromBehind ? 1 : 0)];
     return std::array<float, 3>{l[0], l[1], l[2]};
   };
-  Image indirect = gather_once(grid, hits, lookup, misses.cube_light(grid, light.data(), 2),
-                               bounces == 1 ? coverage : nullptr);
+  CubeLight cube = misses.cube_light(grid, light.data(), 2);
+  Image indirect = gather_once(grid, hits, lookup, cube, bounces == 1 ? coverage : nullptr);
   for (int b = 1; b < bounces; ++b) {
     parallel_for_rows(grid.height, [&](int by) {
       for (int bx = 0; bx < grid.width; ++bx) {
@@ -335,9 +333,10 @@ Image gather_bounces(const TraceGrid& grid, const HitSource& hits, int bounces,
         }
       }
     });
-    indirect = gather_once(grid, hits, lookup, misses.cube_light(grid, light.data(), 2),
-                           b + 1 == bounces ? coverage : nullptr);
+    cube = misses.cube_light(grid, light.data(), 2);
+    indirect = gather_once(grid, hits, lookup, cube, b + 1 == bounces ? coverage : nullptr);
   }
+  if (last_cube) *last_cube = cube;
   return indirect;
 }
 

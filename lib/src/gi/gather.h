@@ -100,11 +100,14 @@ class HitSource {
 // sample (1 channel) the share of the last gather's light that its hits brought rather than the
 // miss model (the mean of the three channels; where nothing brought light, the share of the
 // hemisphere that met a traced surface): 1 where the result is traced, 0 where it is the miss
-// model's estimate, -1 where the grid has no origin.
+// model's estimate, -1 where the grid has no origin. With `last_cube`, the cube colours of the
+// last gather.
 Image gather_bounces(const TraceGrid& grid, const HitSource& hits, int bounces,
-                     const MissModel& misses, Image* coverage = nullptr);
+                     const MissModel& misses, Image* coverage = nullptr,
+                     CubeLight* last_cube = nullptr);
 Image gather_bounces(const TraceGrid& grid, const WeightedHits& hits, int bounces,
-                     const MissModel& misses, Image* coverage = nullptr);
+                     const MissModel& misses, Image* coverage = nullptr,
+                     CubeLight* last_cube = nullptr);
 
 // gather_bounces' coverage (trace samples at `scale` pixels each, -1 without a surface) at the
 // resolution of `depth` (the frame's): averaged over each sample's 3 x 3 neighbours on its

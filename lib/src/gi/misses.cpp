@@ -200,8 +200,8 @@ std::array<float, 3> MissModel::environment(const Vec3f& d) const {
                         d.x * m[0][2] + d.y * m[1][2] + d.z * m[2][2]});
 }
 
-std::array<std::array<float, 3>, kCubeFaces> MissModel::cube_light(
-    const TraceGrid& grid, const std::array<float, 4>* light, std::size_t stride) const {
+CubeLight MissModel::cube_light(const TraceGrid& grid, const std::array<float, 4>* light,
+                                std::size_t stride) const {
   // Sums in double, per row in parallel and then over the rows in order: the same bits for any
   // thread count.
   struct Sums {
@@ -249,7 +249,7 @@ std::array<std::array<float, 3>, kCubeFaces> MissModel::cube_light(
     weight_all += r.weight_all;
     n += r.n;
   }
-  std::array<std::array<float, 3>, kCubeFaces> out{};
+  CubeLight out{};
   if (n == 0 || !(weight_all > 0)) return out;
   // A face few surfaces face is drawn towards the (border-weighted) mean: a prior worth a
   // quarter of an average face's weight (the faces' weights sum to weight_all).

@@ -48,6 +48,9 @@ struct TraceGrid;
 
 constexpr int kCubeFaces = 6;  // right, left, up, down, forward, back: rays heading that way
 
+// The cube's colours at one bounce: RGB per face.
+using CubeLight = std::array<std::array<float, 3>, kCubeFaces>;
+
 class MissModel {
  public:
   static constexpr int kElevationBins = 16;  // equal solid angle: uniform in sin(elevation)
@@ -108,9 +111,8 @@ class MissModel {
   // The cube's colours for one bounce: light[stride * s] is trace sample s's light (what it
   // reflects plus albedo x its indirect light; RGB and one unused float), over the samples with
   // an origin.
-  std::array<std::array<float, 3>, kCubeFaces> cube_light(const TraceGrid& grid,
-                                                          const std::array<float, 4>* light,
-                                                          std::size_t stride) const;
+  CubeLight cube_light(const TraceGrid& grid, const std::array<float, 4>* light,
+                       std::size_t stride) const;
 
   // One line for -v: the up axis, the sky share by elevation, where it came from.
   std::string describe() const;
