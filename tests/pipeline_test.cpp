@@ -770,12 +770,15 @@ TEST(Pipeline, TheMissModelClosesAClosedBox) {
   }
 }
 
-// The temporal window makes the miss model's colours its frames' mean. Three frames of the
-// closed box, lit D = 0.2, 0.5 and 1.1 (direct light includes the albedo here): with one bounce
-// each ray brings D, from a face it hits or from the cube (whose colours are the border's light,
-// D), so a frame's light is D everywhere and its coverage the share its hits brought. Levelled,
-// the misses bring the window's mean, 0.6: D x coverage + 0.6 x (1 - coverage), at every sample.
-TEST(Pipeline, TheWindowGivesItsFramesTheMeanColoursOfTheirMisses) {
+// The temporal window levels its frames' misses: frames lit alike take the mean colours of
+// their misses (sideways, up, down), frames lit otherwise keep their own. In a closed box (one
+// bounce: each ray brings the light of a face it hits, or the cube's colours, the border's light),
+// three frames lit 0.5 but for a band three pixels wide along the frame's edges, 0.75, 0.5 and
+// 0.4 (their mean reflected light within 1.25x of each other): the brighter border gives the
+// brighter misses, and each frame's light moves by its shares of them x (the mean - its own),
+// down for the first, up for the last. Lit 0.2, 0.5 and 1.1 everywhere (a change of lighting,
+// not of view), each keeps its light as it is.
+TEST(Pipeline, TheWindowLevelsTheMissesOfFramesLitAlike) {
   GiSettings s;
   s.bounces = 1;
   s.miss = MissMode::kAuto;
@@ -796,44 +799,65 @@ TEST(Pipeline, TheWindowGivesItsFramesTheMeanColoursOfTheirMisses) {
       g.normal.at(axis, x, y) = r[axis] > 0 ? -1.0f : 1.0f;
     }
   f.seq.frames_on_disk = {1, 2, 3};  // a shot, so that the plan has a window
-  const float lit[3] = {0.2f, 0.5f, 1.1f};
-  const float mean = (lit[0] + lit[1] + lit[2]) / 3;
+  const auto lit = [&](int frame, float inside, float edge) {
+    GBuffer out = g;
+    out.frame = frame;
+    out.direct = Image(w, h, 3, inside);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x)
+        if (std::min(std::min(x, w - 1 - x), std::min(y, h - 1 - y)) < 3)
+          for (int c = 0; c < 3; ++c) out.direct.at(c, x, y) = edge;
+    return out;
+  };
+  const auto mean_of = [](const Image& image) {
+    double sum = 0;
+    for (float v : image.data()) sum += v;
+    return sum / static_cast<double>(image.data().size());
+  };
   for (Tracer tracer : kTracers) {
     SCOPED_TRACE(tracer_name(tracer));
     s.tracer = tracer;
     const Pipeline pipeline(f.seq, s);
     ASSERT_EQ(pipeline.plan().temporal, TemporalMode::kWindow);
-    std::vector<Pipeline::TracedLight> traced;
-    for (int k = 0; k < 3; ++k) {
-      GBuffer frame = g;
-      frame.frame = k + 1;
-      frame.direct = Image(w, h, 3, lit[k]);
-      traced.push_back(pipeline.trace_light(frame));
-      for (int group = 0; group < 3; ++group)
-        ASSERT_NEAR(traced.back().miss_colours[group][1], lit[k], 1e-5f * lit[k]) << group;
-    }
-    const std::vector<Image> levelled =
-        pipeline.window_lights({&traced[0], &traced[1], &traced[2]});
-    ASSERT_EQ(levelled.size(), 3u);
-    for (int k = 0; k < 3; ++k) {
-      const Image& cov = traced[k].coverage;
-      double missed = 0;
-      int samples = 0;
-      for (std::size_t p = 0; p < cov.plane_size(); ++p) {
-        const float c = cov.plane(0)[p];
-        if (c < 0) continue;
-        const float want = lit[k] * c + mean * (1 - c);
-        for (int ch = 0; ch < 3; ++ch) {
-          // The box's faces are enclosed to within a per cent (the rest of a miss is black).
-          ASSERT_NEAR(traced[k].light.plane(ch)[p], lit[k], 0.01f * lit[k]) << "frame " << k;
-          ASSERT_NEAR(levelled[k].plane(ch)[p], want, 0.01f * std::max(lit[k], mean))
-              << "frame " << k << " at " << p;
-        }
-        missed += 1 - c;
-        ++samples;
+    {
+      SCOPED_TRACE("lit alike, other borders");
+      const std::vector<Pipeline::TracedLight> t = {pipeline.trace_light(lit(1, 0.5f, 0.75f)),
+                                                    pipeline.trace_light(lit(2, 0.5f, 0.5f)),
+                                                    pipeline.trace_light(lit(3, 0.5f, 0.4f))};
+      const std::vector<Image> levelled = pipeline.window_lights({&t[0], &t[1], &t[2]});
+      ASSERT_EQ(levelled.size(), 3u);
+      EXPECT_GT(t[0].miss_colours[0][1], t[2].miss_colours[0][1] + 0.05f);
+      // Lit alike: within the window's 1.25x.
+      for (int k = 1; k < 3; ++k)
+        ASSERT_LT(t[0].reflected_mean[1], 1.25f * t[k].reflected_mean[1]) << w << "x" << h;
+      for (int k = 0; k < 3; ++k) {
+        ASSERT_EQ(t[k].miss_shares.channels(), 3);
+        float want_delta[3][3];
+        for (int grp = 0; grp < 3; ++grp)
+          for (int c = 0; c < 3; ++c)
+            want_delta[grp][c] = (t[0].miss_colours[grp][c] + t[1].miss_colours[grp][c] +
+                                  t[2].miss_colours[grp][c]) /
+                                     3 -
+                                 t[k].miss_colours[grp][c];
+        for (std::size_t p = 0; p < t[k].light.plane_size(); ++p)
+          for (int c = 0; c < 3; ++c) {
+            float want = t[k].light.plane(c)[p];
+            for (int grp = 0; grp < 3; ++grp)
+              want += t[k].miss_shares.plane(grp)[p] * want_delta[grp][c];
+            ASSERT_NEAR(levelled[k].plane(c)[p], std::max(want, 0.0f), 1e-5f)
+                << "frame " << k << " at " << p;
+          }
       }
-      // The box's misses are not a token share: the frame's edges send most rays off screen.
-      EXPECT_GT(missed / samples, 0.1) << "frame " << k;
+      EXPECT_LT(mean_of(levelled[0]), mean_of(t[0].light) - 0.01);
+      EXPECT_GT(mean_of(levelled[2]), mean_of(t[2].light) + 0.01);
+    }
+    {
+      SCOPED_TRACE("lit otherwise");
+      const std::vector<Pipeline::TracedLight> t = {pipeline.trace_light(lit(1, 0.2f, 0.2f)),
+                                                    pipeline.trace_light(lit(2, 0.5f, 0.5f)),
+                                                    pipeline.trace_light(lit(3, 1.1f, 1.1f))};
+      const std::vector<Image> levelled = pipeline.window_lights({&t[0], &t[1], &t[2]});
+      for (int k = 0; k < 3; ++k) EXPECT_EQ(levelled[k].data(), t[k].light.data()) << k;
     }
   }
 }

@@ -213,7 +213,8 @@ struct Pipeline::Impl {
   // With `cube` and `shares`, the last bounce's cube colours and the samples' shares of them.
   Image trace(const GBuffer& g, GBuffer* grid_out, Image* coverage,
               std::shared_ptr<detail::FrameTrace>* keep = nullptr,
-              detail::CubeLight* cube = nullptr, Image* shares = nullptr) const;
+              detail::CubeLight* cube = nullptr, Image* shares = nullptr,
+              std::array<float, 3>* reflected_mean = nullptr) const;
 
   // Traced light on the trace grid denoised there (the pyramid from the grid's level), when
   // the plan denoises: TracedLight::light.
@@ -282,12 +283,25 @@ int pyramid_level(int scale) {
 
 Image Pipeline::Impl::trace(const GBuffer& g, GBuffer* grid_out, Image* coverage,
                             std::shared_ptr<detail::FrameTrace>* keep, detail::CubeLight* cube,
-                            Image* shares) const {
+                            Image* shares, std::array<float, 3>* reflected_mean) const {
   const GiSettings& s = settings;
   const Image reflected = detail::reflected_radiance(g, plan.gather_emission);
   detail::TraceGrid grid =
       detail::make_trace_grid(g, reflected, plan.trace_scale, static_cast<float>(s.thickness));
   const detail::MissModel misses(g, s.miss, env);
+  if (reflected_mean) {
+    // The frame's light as its surfaces reflect it, over its trace samples: what a change of
+    // lighting scales and a change of view does not.
+    double sum[3] = {};
+    std::size_t n = 0;
+    for (std::size_t p = 0; p < grid.origin.size(); ++p) {
+      if (grid.origin[p] < 0) continue;
+      for (int c = 0; c < 3; ++c) sum[c] += grid.reflected.plane(c)[p];
+      ++n;
+    }
+    for (int c = 0; c < 3; ++c)
+      (*reflected_mean)[c] = n > 0 ? static_cast<float>(sum[c] / static_cast<double>(n)) : 0.0f;
+  }
   log_info("frame " + std::to_string(g.frame) + ": " + misses.describe());
   if (grid_out) *grid_out = grid_gbuffer(g, grid);
   switch (s.tracer) {
@@ -331,9 +345,9 @@ Pipeline::TracedLight Pipeline::trace_light(const GBuffer& g) const {
   const bool window = impl_->plan.temporal == TemporalMode::kWindow;
   detail::CubeLight cube{};
   Image shares;
-  out.light =
-      impl_->trace(g, &out.grid, &out.coverage, impl_->plan.multiframe > 0 ? &out.trace : nullptr,
-                   window ? &cube : nullptr, window ? &shares : nullptr);
+  out.light = impl_->trace(
+      g, &out.grid, &out.coverage, impl_->plan.multiframe > 0 ? &out.trace : nullptr,
+      window ? &cube : nullptr, window ? &shares : nullptr, window ? &out.reflected_mean : nullptr);
   out.light = impl_->denoise_on_grid(g, std::move(out.light));
   if (shares.channels() != detail::kCubeFaces) return out;
   // Three groups of faces, one plane each, so that one pass of the denoiser carries them: the
@@ -358,6 +372,7 @@ Pipeline::TracedLight Pipeline::trace_light(const GBuffer& g) const {
     }
     for (int c = 0; c < 3; ++c)
       out.miss_colours[group][c] = weight > 0 ? static_cast<float>(colour[c] / weight) : 0.0f;
+    out.miss_weight[group] = static_cast<float>(weight);
   }
   // Denoised as the light is (the denoiser's weights do not depend on what it filters), so
   // that a change of colours moves the denoised light as it would have moved the traced one.
@@ -366,22 +381,39 @@ Pipeline::TracedLight Pipeline::trace_light(const GBuffer& g) const {
 }
 
 std::vector<Image> Pipeline::window_lights(const std::vector<const TracedLight*>& window) const {
+  // A frame's misses take the mean colours of the window's frames lit as it is (their
+  // surfaces' mean reflected light within kSameLight of its own, either way), over those with
+  // misses in each group: the view decides which surroundings a border shows, and the frames
+  // lit alike agree on them; a frame lit otherwise (a flash, a lamp switched on) keeps its own
+  // colours and lends them to no other.
+  constexpr float kSameLight = 1.25f;
+  const auto brightness = [](const TracedLight& t) {
+    return t.reflected_mean[0] + t.reflected_mean[1] + t.reflected_mean[2];
+  };
   std::vector<Image> out;
-  double mean[3][3] = {};
-  int n = 0;
-  for (const TracedLight* t : window) {
-    if (t->miss_shares.empty()) continue;
-    for (int g = 0; g < 3; ++g)
-      for (int c = 0; c < 3; ++c) mean[g][c] += t->miss_colours[g][c];
-    ++n;
-  }
   for (const TracedLight* t : window) {
     Image light = t->light;
-    if (!t->miss_shares.empty()) {
-      float delta[3][3];
-      for (int g = 0; g < 3; ++g)
+    const float own = brightness(*t);
+    float delta[3][3] = {};
+    bool any = false;
+    if (!t->miss_shares.empty() && own > 0)
+      for (int g = 0; g < 3; ++g) {
+        if (!(t->miss_weight[g] > 0)) continue;
+        double sum[3] = {};
+        int n = 0;
+        for (const TracedLight* u : window) {
+          const float other = brightness(*u);
+          if (u->miss_shares.empty() || !(u->miss_weight[g] > 0) || !(other > 0) ||
+              other > kSameLight * own || own > kSameLight * other)
+            continue;
+          for (int c = 0; c < 3; ++c) sum[c] += u->miss_colours[g][c];
+          ++n;
+        }
         for (int c = 0; c < 3; ++c)
-          delta[g][c] = static_cast<float>(mean[g][c] / n - t->miss_colours[g][c]);
+          delta[g][c] = static_cast<float>(sum[c] / n - t->miss_colours[g][c]);
+        any = true;
+      }
+    if (any)
       detail::parallel_for_rows(light.height(), [&](int y) {
         const std::size_t row = static_cast<std::size_t>(y) * light.width();
         for (int x = 0; x < light.width(); ++x) {
@@ -393,7 +425,6 @@ std::vector<Image> Pipeline::window_lights(const std::vector<const TracedLight*>
           }
         }
       });
-    }
     out.push_back(std::move(light));
   }
   return out;
