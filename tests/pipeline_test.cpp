@@ -730,6 +730,25 @@ TEST(Pipeline, ColourTransformsTouchLightAndAlbedoOnly) {
   EXPECT_GT(changed, 0.01);
 }
 
+// A camera of 120 degrees (104 down) at the centre of a closed cube of half-size 1, drawn into
+// blank_scene: each pixel the nearest face (the largest component of its ray reaches |1|
+// first), its normal facing the camera; no light.
+Frame closed_box(const GiSettings& settings) {
+  Frame f = blank_scene(settings, 120.0, 0.0f);
+  GBuffer& g = f.g;
+  const Camera& cam = g.camera;
+  for (int y = 0; y < g.height(); ++y)
+    for (int x = 0; x < g.width(); ++x) {
+      const double r[3] = {(x + 0.5 - cam.cx) / cam.fx, (cam.cy - (y + 0.5)) / cam.fy, 1.0};
+      int axis = 2;
+      for (int a = 0; a < 2; ++a)
+        if (std::fabs(r[a]) > std::fabs(r[axis])) axis = a;
+      g.depth.at(0, x, y) = static_cast<float>(1.0 / std::fabs(r[axis]));
+      g.normal.at(axis, x, y) = r[axis] > 0 ? -1.0f : 1.0f;
+    }
+  return f;
+}
+
 // The camera at the centre of a closed cube [-1, 1]^3 whose every surface reflects 0.5, looking
 // at a wall: the frame's border shows the ceiling, the floor and both side walls. Under a black
 // environment the miss model finds no sky and every direction enclosed (behind the camera as
@@ -741,21 +760,9 @@ TEST(Pipeline, TheMissModelClosesAClosedBox) {
   base.miss = MissMode::kAuto;
   base.denoise = DenoiseMode::kNone;
   base.temporal = TemporalMode::kNone;
-  Frame f = blank_scene(base, 120.0, 0.0f);  // 104 degrees down
+  Frame f = closed_box(base);
   GBuffer& g = f.g;
-  const int w = g.width(), h = g.height();
-  const Camera& cam = g.camera;
-  g.direct = Image(w, h, 3, 0.5f);  // this layout's direct light includes the albedo
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      const double r[3] = {(x + 0.5 - cam.cx) / cam.fx, (cam.cy - (y + 0.5)) / cam.fy, 1.0};
-      // The nearest face: the largest component of the ray reaches |1| first.
-      int axis = 2;
-      for (int a = 0; a < 2; ++a)
-        if (std::fabs(r[a]) > std::fabs(r[axis])) axis = a;
-      g.depth.at(0, x, y) = static_cast<float>(1.0 / std::fabs(r[axis]));
-      g.normal.at(axis, x, y) = r[axis] > 0 ? -1.0f : 1.0f;
-    }
+  g.direct = Image(g.width(), g.height(), 3, 0.5f);  // this layout's direct light has the albedo
   const detail::Environment black;
   const detail::MissModel model(g, MissMode::kAuto, black);
   for (float sky : model.sky_by_elevation()) EXPECT_EQ(sky, 0.0f);
@@ -785,19 +792,9 @@ TEST(Pipeline, TheWindowLevelsTheMissesOfFramesLitAlike) {
   s.denoise = DenoiseMode::kNone;
   s.temporal = TemporalMode::kWindow;
   s.trace_scale = 1;
-  Frame f = blank_scene(s, 120.0, 0.0f);
-  GBuffer& g = f.g;
+  Frame f = closed_box(s);
+  const GBuffer& g = f.g;
   const int w = g.width(), h = g.height();
-  const Camera& cam = g.camera;
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      const double r[3] = {(x + 0.5 - cam.cx) / cam.fx, (cam.cy - (y + 0.5)) / cam.fy, 1.0};
-      int axis = 2;
-      for (int a = 0; a < 2; ++a)
-        if (std::fabs(r[a]) > std::fabs(r[axis])) axis = a;
-      g.depth.at(0, x, y) = static_cast<float>(1.0 / std::fabs(r[axis]));
-      g.normal.at(axis, x, y) = r[axis] > 0 ? -1.0f : 1.0f;
-    }
   f.seq.frames_on_disk = {1, 2, 3};  // a shot, so that the plan has a window
   const auto lit = [&](int frame, float inside, float edge) {
     GBuffer out = g;
