@@ -615,6 +615,49 @@ TEST(TemporalWindow, SingleFrameIsTheFrame) {
   EXPECT_TRUE(same_bits(temporal_window(pointers(three), pointers(lights), 1, 0), lights[1]));
 }
 
+// Lit alike or not: the light of the surfaces two frames both show decides, not the frames'
+// means. The synthetic shot's wall and floor reflect 0.4 and 0.8 (per channel a little
+// less); the sphere, moving 1.5 per frame (more than its diameter, so no point of it is where
+// it was), is what a lamp entering the view is. Frame 1 against frame 2: the same static light
+// and a sphere 40x as bright (the means 1.4x apart): ratio 1; the static light doubled in
+// frame 2: ratio 1/2 either way round; a camera 100 units on (the views share nothing): none.
+TEST(SharedLight, ComparesTheSurfacesBothFramesShow) {
+  Shot spec;
+  spec.sphere_velocity = {1.5, 0, 0};
+  spec.sphere_start = {-0.8, -0.3, 5};
+  const std::vector<GBuffer> shot = render_shot(spec, 1, 2);
+  // The wall faces -z, the floor +y; the sphere's normals are neither.
+  const auto lit = [](const GBuffer& g, float scale, float sphere) {
+    Image light(g.width(), g.height(), 3);
+    for (int y = 0; y < g.height(); ++y)
+      for (int x = 0; x < g.width(); ++x) {
+        if (!g.is_surface(x, y)) continue;
+        const bool wall = g.normal.at(2, x, y)<-0.999f, floor = g.normal.at(1, x, y)> 0.999f;
+        for (int c = 0; c < 3; ++c)
+          light.at(c, x, y) =
+              wall || floor ? scale * (floor ? 0.8f : 0.4f) * (1 - 0.1f * c) : sphere;
+      }
+    return light;
+  };
+  const auto mean = [](const Image& image) {
+    double sum = 0;
+    for (float v : image.data()) sum += v;
+    return sum / static_cast<double>(image.data().size());
+  };
+  const Image a = lit(shot[0], 1.0f, 0.5f);
+  const Image b_lamp = lit(shot[1], 1.0f, 20.0f), b_doubled = lit(shot[1], 2.0f, 1.0f);
+  ASSERT_GT(mean(b_lamp), 1.4 * mean(a));
+  EXPECT_NEAR(shared_light_ratio(shot[0], a, shot[1], b_lamp), 1.0, 0.02);
+  EXPECT_NEAR(shared_light_ratio(shot[0], a, shot[1], b_doubled), 0.5, 0.01);
+  EXPECT_NEAR(shared_light_ratio(shot[1], b_doubled, shot[0], a), 2.0, 0.04);
+  Shot far = spec;
+  far.camera_velocity = {100, 0, 0};
+  const std::vector<GBuffer> apart = render_shot(far, 1, 2);
+  EXPECT_TRUE(std::isnan(shared_light_ratio(apart[0], lit(apart[0], 1.0f, 0.5f), apart[1],
+                                            lit(apart[1], 1.0f, 0.5f))));
+  EXPECT_THROW(shared_light_ratio(shot[0], Image(3, 3, 3), shot[1], b_lamp), Error);
+}
+
 // Numerical extremes (DESIGN.md): never a NaN, never a crash.
 
 TEST(Temporal, ExtremeInputsGiveFiniteResults) {

@@ -194,11 +194,11 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
             strip;
   }
   // The temporal ring: every frame of the window on the trace grid (its light, coverage, depth,
-  // normal and motion: 12 planes; in the window its misses' shares, 3 more, and the levelled
-  // light of each while the centre is filtered, 3), and the frames waiting for their window's
-  // later frames: their passes without motion, or with passthrough their input's pixels alone
-  // (the passes are converted from them again).
-  const std::uint64_t frame_grid = planes(plan.temporal == TemporalMode::kWindow ? 18 : 12, grid);
+  // normal and motion: 12 planes; in the window its misses' shares and reflected light, 6
+  // more, and the levelled light of each while the centre is filtered, 3), and the frames
+  // waiting for their window's later frames: their passes without motion, or with passthrough
+  // their input's pixels alone (the passes are converted from them again).
+  const std::uint64_t frame_grid = planes(plan.temporal == TemporalMode::kWindow ? 21 : 12, grid);
   std::uint64_t ring_frames = 1, waiting = 0;
   if (plan.temporal == TemporalMode::kWindow) {
     ring_frames = 2 * s.temporal_radius + 1;

@@ -18,6 +18,7 @@
 #include "slices.h"
 #include "ssgi/error.h"
 #include "ssgi/log.h"
+#include "temporal.h"
 
 namespace ssgi {
 namespace {
@@ -210,11 +211,12 @@ struct Pipeline::Impl {
   // Tracing, misses and bounces on the trace grid: the light before the denoiser, and, when
   // `grid_out` is given, the grid as a G-buffer for the temporal stage, when `coverage` is, the
   // coverage there (gather_bounces), when `keep` is (multiframe), what continuing rays needs.
-  // With `cube` and `shares`, the last bounce's cube colours and the samples' shares of them.
+  // With `cube` and `shares`, the last bounce's cube colours and the samples' shares of them,
+  // with `reflected` the light the samples reflect.
   Image trace(const GBuffer& g, GBuffer* grid_out, Image* coverage,
               std::shared_ptr<detail::FrameTrace>* keep = nullptr,
               detail::CubeLight* cube = nullptr, Image* shares = nullptr,
-              std::array<float, 3>* reflected_mean = nullptr) const;
+              Image* reflected = nullptr) const;
 
   // Traced light on the trace grid denoised there (the pyramid from the grid's level), when
   // the plan denoises: TracedLight::light.
@@ -283,25 +285,13 @@ int pyramid_level(int scale) {
 
 Image Pipeline::Impl::trace(const GBuffer& g, GBuffer* grid_out, Image* coverage,
                             std::shared_ptr<detail::FrameTrace>* keep, detail::CubeLight* cube,
-                            Image* shares, std::array<float, 3>* reflected_mean) const {
+                            Image* shares, Image* reflected_out) const {
   const GiSettings& s = settings;
   const Image reflected = detail::reflected_radiance(g, plan.gather_emission);
   detail::TraceGrid grid =
       detail::make_trace_grid(g, reflected, plan.trace_scale, static_cast<float>(s.thickness));
   const detail::MissModel misses(g, s.miss, env);
-  if (reflected_mean) {
-    // The frame's light as its surfaces reflect it, over its trace samples: what a change of
-    // lighting scales and a change of view does not.
-    double sum[3] = {};
-    std::size_t n = 0;
-    for (std::size_t p = 0; p < grid.origin.size(); ++p) {
-      if (grid.origin[p] < 0) continue;
-      for (int c = 0; c < 3; ++c) sum[c] += grid.reflected.plane(c)[p];
-      ++n;
-    }
-    for (int c = 0; c < 3; ++c)
-      (*reflected_mean)[c] = n > 0 ? static_cast<float>(sum[c] / static_cast<double>(n)) : 0.0f;
-  }
+  if (reflected_out) *reflected_out = grid.reflected;
   log_info("frame " + std::to_string(g.frame) + ": " + misses.describe());
   if (grid_out) *grid_out = grid_gbuffer(g, grid);
   switch (s.tracer) {
@@ -347,7 +337,7 @@ Pipeline::TracedLight Pipeline::trace_light(const GBuffer& g) const {
   Image shares;
   out.light = impl_->trace(
       g, &out.grid, &out.coverage, impl_->plan.multiframe > 0 ? &out.trace : nullptr,
-      window ? &cube : nullptr, window ? &shares : nullptr, window ? &out.reflected_mean : nullptr);
+      window ? &cube : nullptr, window ? &shares : nullptr, window ? &out.reflected : nullptr);
   out.light = impl_->denoise_on_grid(g, std::move(out.light));
   if (shares.channels() != detail::kCubeFaces) return out;
   // Three groups of faces, one plane each, so that one pass of the denoiser carries them: the
@@ -381,37 +371,45 @@ Pipeline::TracedLight Pipeline::trace_light(const GBuffer& g) const {
 }
 
 std::vector<Image> Pipeline::window_lights(const std::vector<const TracedLight*>& window) const {
-  // A frame's misses take the mean colours of the window's frames lit as it is (their
-  // surfaces' mean reflected light within kSameLight of its own, either way), over those with
-  // misses in each group: the view decides which surroundings a border shows, and the frames
-  // lit alike agree on them; a frame lit otherwise (a flash, a lamp switched on) keeps its own
-  // colours and lends them to no other.
-  constexpr float kSameLight = 1.25f;
-  const auto brightness = [](const TracedLight& t) {
-    return t.reflected_mean[0] + t.reflected_mean[1] + t.reflected_mean[2];
+  // A frame's misses take the mean colours of the window's frames lit as it is (the surfaces
+  // both show reflecting the same light to kSameLight, either way), over those with misses in
+  // each group: the view decides which surroundings a border shows, and the frames lit alike
+  // agree on them; a frame lit otherwise (a flash, a lamp switched on) keeps its own colours
+  // and lends them to no other.
+  constexpr double kSameLight = 1.25;
+  const std::size_t n = window.size();
+  const auto levels = [](const TracedLight& t) {
+    return !t.miss_shares.empty() && t.reflected.channels() == 3;
   };
+  std::vector<char> alike(n * n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    alike[i * n + i] = 1;
+    for (std::size_t j = i + 1; j < n; ++j) {
+      if (!levels(*window[i]) || !levels(*window[j])) continue;
+      const double ratio = detail::shared_light_ratio(window[i]->grid, window[i]->reflected,
+                                                      window[j]->grid, window[j]->reflected);
+      alike[i * n + j] = alike[j * n + i] = ratio <= kSameLight && ratio * kSameLight >= 1.0;
+    }
+  }
   std::vector<Image> out;
-  for (const TracedLight* t : window) {
+  for (std::size_t i = 0; i < n; ++i) {
+    const TracedLight* t = window[i];
     Image light = t->light;
-    const float own = brightness(*t);
     float delta[3][3] = {};
     bool any = false;
-    if (!t->miss_shares.empty() && own > 0)
+    if (levels(*t))
       for (int g = 0; g < 3; ++g) {
         if (!(t->miss_weight[g] > 0)) continue;
         double sum[3] = {};
-        int n = 0;
-        for (const TracedLight* u : window) {
-          const float other = brightness(*u);
-          if (u->miss_shares.empty() || !(u->miss_weight[g] > 0) || !(other > 0) ||
-              other > kSameLight * own || own > kSameLight * other)
-            continue;
-          for (int c = 0; c < 3; ++c) sum[c] += u->miss_colours[g][c];
-          ++n;
+        int count = 0;
+        for (std::size_t j = 0; j < n; ++j) {
+          if (!alike[i * n + j] || !(window[j]->miss_weight[g] > 0)) continue;
+          for (int c = 0; c < 3; ++c) sum[c] += window[j]->miss_colours[g][c];
+          ++count;
         }
         for (int c = 0; c < 3; ++c)
-          delta[g][c] = static_cast<float>(sum[c] / n - t->miss_colours[g][c]);
-        any = true;
+          delta[g][c] = static_cast<float>(sum[c] / count - t->miss_colours[g][c]);
+        any = any || count > 1;
       }
     if (any)
       detail::parallel_for_rows(light.height(), [&](int y) {

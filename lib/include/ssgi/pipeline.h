@@ -93,19 +93,21 @@ class Pipeline {
     // weighted by their shares over the frame), and each trace sample's shares of those three,
     // denoised as the light is (3 channels; empty when the plan has no window).
     std::array<std::array<float, 3>, 3> miss_colours{};
-    std::array<float, 3> miss_weight{};     // each group's share of the frame's misses (0: none)
-    std::array<float, 3> reflected_mean{};  // RGB: the light its surfaces reflect, their mean
+    std::array<float, 3> miss_weight{};  // each group's share of the frame's misses (0: none)
     Image miss_shares;
+    Image reflected;  // 3 channels, the grid's size: the light its surfaces reflect
   };
   TracedLight trace_light(const GBuffer& frame) const;
 
   // The temporal window's lights (TracedLight::light of each of `window`) with the miss model's
   // colours of the last bounce levelled over the window: each frame's light plus its shares x
-  // (its levelled colours - its own), where a group's levelled colour is the frame's reflected
-  // light x the window's mean of colour / reflected light (over the frames with misses in that
-  // group). A frame's border shows other surroundings as the view moves; the window's frames
-  // together show more, and agree; a change of lighting scales a frame's reflected light and
-  // stays its own. Frames without shares are as they are.
+  // (the levelled colours - its own), a group's levelled colour being the mean of its colours
+  // over the window's frames lit alike (those with misses in that group). A frame's border
+  // shows other surroundings as the view moves; the window's frames together show more, and
+  // agree. Two frames are lit alike when the surfaces both show reflect the same light, to
+  // 1.25x (detail::shared_light_ratio): a lamp entering the view changes what a frame shows, a
+  // flash changes the light of what both show; frames that share no surface are not. Frames
+  // without shares are as they are.
   std::vector<Image> window_lights(const std::vector<const TracedLight*>& window) const;
 
   // Plan::multiframe: TracedLight::light and ::coverage of window[center] (frame `frame`) with

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <limits>
 #include <string>
 
 #include "parallel.h"
@@ -52,6 +53,13 @@ constexpr double kMinHistoryWeight = 0.05;
 constexpr double kClipGamma = 1.0;
 constexpr double kClipRelativeFloor = 0.25;
 constexpr int kClipRadius = 1;
+// shared_light_ratio compares two frames on a lattice of about this many samples across (and
+// down), a sample being shared when the other frame's nearest pixel lies within this fraction
+// of its depth of it (static points; a moving object or noise in the depth pass only thins
+// the sample), and says nothing from fewer shared samples than this.
+constexpr int kSharedLattice = 64;
+constexpr double kSharedDepthTolerance = 0.02;
+constexpr int kMinShared = 16;
 
 struct Vec2 {
   double x = 0, y = 0;
@@ -470,6 +478,44 @@ Image temporal_ema(const GBuffer& current, const Image& current_indirect, const 
     }
   });
   return out;
+}
+
+double shared_light_ratio(const GBuffer& a, const Image& a_light, const GBuffer& b,
+                          const Image& b_light) {
+  check_light(a, a_light, "light");
+  check_light(b, b_light, "light");
+  const Mat4d to_b = camera_to_camera(a, b);
+  const double ax = a.data_window.x0 - a.display_window.x0,
+               ay = a.data_window.y0 - a.display_window.y0,
+               bx = b.data_window.x0 - b.display_window.x0,
+               by = b.data_window.y0 - b.display_window.y0;
+  const int w = a.width(), h = a.height();
+  const int stride =
+      std::max(1, static_cast<int>(std::sqrt(static_cast<double>(w) * h) / kSharedLattice));
+  double sum_a = 0, sum_b = 0;
+  int shared = 0;
+  for (int y = stride / 2; y < h; y += stride)
+    for (int x = stride / 2; x < w; x += stride) {
+      const float z = a.depth.at(0, x, y);
+      if (!has_surface(z)) continue;
+      const Vec3d p = to_b.transform_point(a.camera.unproject(x + ax + 0.5, y + ay + 0.5, z));
+      if (!(p.z > 0)) continue;
+      double px, py;
+      b.camera.project(p, &px, &py);
+      const double fx = std::floor(px - bx), fy = std::floor(py - by);
+      if (!(fx >= 0 && fy >= 0 && fx < b.width() && fy < b.height())) continue;
+      const int qx = static_cast<int>(fx), qy = static_cast<int>(fy);
+      const float zb = b.depth.at(0, qx, qy);
+      if (!has_surface(zb) || std::fabs(zb - p.z) > kSharedDepthTolerance * p.z) continue;
+      for (int c = 0; c < 3; ++c) {
+        sum_a += finite_or_zero(a_light.at(c, x, y));
+        sum_b += finite_or_zero(b_light.at(c, qx, qy));
+      }
+      ++shared;
+    }
+  if (shared < kMinShared || !(sum_a > 0) || !(sum_b > 0))
+    return std::numeric_limits<double>::quiet_NaN();
+  return sum_a / sum_b;
 }
 
 int ema_preroll_frames(float alpha, double relative_bound) {

@@ -43,6 +43,15 @@ void clip_history(const GBuffer& current, const Image& current_indirect, const I
 Image temporal_window(const std::vector<const GBuffer*>& frames,
                       const std::vector<const Image*>& indirect, int center, int radius);
 
+// How much brighter frame `a` is than frame `b` where they show the same surfaces: over a
+// lattice of a's surface pixels that b shows too (static points carried through the two
+// cameras, b's nearest pixel within 2% of the depth predicted), the sum of a's `a_light` over
+// that of b's `b_light` at the same points (R + G + B; 3-channel images over each frame's data
+// window). NaN when they share fewer than 16 samples or either sum is not positive: a cut, or a
+// view that moved on. Throws Error(kInternal) when an image is not its frame's size.
+double shared_light_ratio(const GBuffer& a, const Image& a_light, const GBuffer& b,
+                          const Image& b_light);
+
 // The seed's exponential moving average (Sachdeva 2022): alpha * current + (1 - alpha) *
 // history, where history is `previous_output` (this function's result for `previous`, or its
 // own light for the first frame of a run) reprojected and clipped; the current light alone
