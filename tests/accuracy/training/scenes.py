@@ -3,6 +3,7 @@
 Usage (Blender 3.4, headless):
   blender -b --factory-startup --python-exit-code 1 -P tests/accuracy/training/scenes.py -- \
       --scene NAME --out DIR [--samples N] [--frames N] [--list] [--no-render]
+      [--panorama FRAME [--panorama-at camera|surfaces]]
 
 Builds scene NAME from primitives only (no assets), renders frames 1..N (default 8) into
 DIR/NAME.####.exr (Cycles CPU, N samples per pixel, default 256, times the scene's
@@ -12,7 +13,10 @@ sample's format, including each frame's OpenEXR worldToCamera and worldToNDC
 (camera_matrices.py). Stock Blender does not put those in the headers: render.sh adds them
 afterwards. --list prints the scene names and what each one exercises
 (SCENE<TAB>name<TAB>description; Blender prints other lines too), --no-render writes
-camera.json only.
+camera.json only. --panorama FRAME renders instead what surrounds the camera at FRAME: a
+256x128 lat-long map (OpenEXR's convention with world +Z up, as ssgi --env-up z reads it), the
+same passes, from the camera's position or, with --panorama-at surfaces, from the mean position
+of the surfaces it sees, to DIR/NAME_panorama_AT.FRAME.exr (surroundings.sh).
 Materials are pure diffuse (Diffuse BSDF) with varied albedo; emitters are Emission shaders.
 """
 
@@ -22,7 +26,7 @@ import os
 import sys
 
 import bpy
-from mathutils import Quaternion, Vector
+from mathutils import Matrix, Quaternion, Vector
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import camera_matrices  # noqa: E402
@@ -625,6 +629,60 @@ def camera_json(scene, name, samples, frames, world):
     return out
 
 
+PANORAMA_WIDTH = 256
+
+
+def visible_centroid(scene, across=32):
+    """The mean position of the surfaces the scene camera sees, over a lattice of its view."""
+    cam = scene.camera
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    origin = cam.matrix_world.translation
+    corners = [cam.matrix_world @ v for v in cam.data.view_frame(scene=scene)]
+    down = across * HEIGHT // WIDTH
+    total, hits = Vector((0.0, 0.0, 0.0)), 0
+    for j in range(down):
+        for i in range(across):
+            u, v = (i + 0.5) / across, (j + 0.5) / down
+            # view_frame: top right, bottom right, bottom left, top left.
+            top = corners[3].lerp(corners[0], u)
+            bottom = corners[2].lerp(corners[1], u)
+            point = top.lerp(bottom, v)
+            hit, location, *_ = scene.ray_cast(depsgraph, origin, (point - origin).normalized())
+            if hit:
+                total += location
+                hits += 1
+    return total / hits if hits else origin.copy()
+
+
+def render_panorama(scene, name, frame, out_dir, at):
+    """Renders what surrounds a point at `frame` as a lat-long map: the scene camera's position
+    (at == "camera") or the mean position of the surfaces it sees (at == "surfaces").
+
+    Cycles' equirectangular camera puts its -Z at the map's centre, +Y up and +X three quarters
+    across; OpenEXR's lat-long map, read with world +Z up (ssgi --env-up z), has world +X at the
+    centre, +Z up and +Y a quarter across. So the panorama camera's axes are X = -Y, Y = +Z,
+    Z = -X in world space.
+    """
+    scene.frame_set(frame)
+    position = (scene.camera.matrix_world.translation.copy() if at == "camera" else
+                visible_centroid(scene))
+    data = bpy.data.cameras.new(name + "_panorama")
+    data.type = "PANO"
+    data.cycles.panorama_type = "EQUIRECTANGULAR"
+    data.clip_start = scene.camera.data.clip_start
+    data.clip_end = scene.camera.data.clip_end
+    cam = bpy.data.objects.new(name + "_panorama", data)
+    scene.collection.objects.link(cam)
+    cam.matrix_world = Matrix(((0.0, 0.0, -1.0, position.x), (-1.0, 0.0, 0.0, position.y),
+                               (0.0, 1.0, 0.0, position.z), (0.0, 0.0, 0.0, 1.0)))
+    scene.camera = cam
+    scene.render.resolution_x = PANORAMA_WIDTH
+    scene.render.resolution_y = PANORAMA_WIDTH // 2
+    scene.render.filepath = os.path.join(os.path.abspath(out_dir),
+                                         f"{name}_panorama_{at}.{frame:04d}.exr")
+    bpy.ops.render.render(write_still=True)
+
+
 def main():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
     opts = {"--samples": "256", "--frames": "8"}
@@ -634,7 +692,8 @@ def main():
         if argv[i] in ("--list", "--no-render"):
             flags.add(argv[i])
             i += 1
-        elif argv[i] in ("--scene", "--out", "--samples", "--frames") and i + 1 < len(argv):
+        elif (argv[i] in ("--scene", "--out", "--samples", "--frames", "--panorama",
+                          "--panorama-at") and i + 1 < len(argv)):
             opts[argv[i]] = argv[i + 1]
             i += 2
         else:
@@ -653,6 +712,10 @@ def main():
     render_settings(scene, samples, frames)
     world = SCENES[name][0](frames)
     os.makedirs(out_dir, exist_ok=True)
+    if "--panorama" in opts:
+        render_panorama(scene, name, int(opts["--panorama"]), out_dir,
+                        opts.get("--panorama-at", "camera"))
+        return
     with open(os.path.join(out_dir, "camera.json"), "w") as f:
         json.dump(camera_json(scene, name, samples, frames, world), f, indent=1)
     if "--no-render" in flags:
