@@ -658,6 +658,44 @@ TEST(SharedLight, ComparesTheSurfacesBothFramesShow) {
   EXPECT_THROW(shared_light_ratio(shot[0], Image(3, 3, 3), shot[1], b_lamp), Error);
 }
 
+// Which sample holds a point: a wall alone (the floor far below, the sphere behind the camera),
+// its light the column's number + 1 in each frame, the camera sliding right so that the wall
+// moves left by 0.3 or 0.7 pixels. At 0.3 every point's pixel is the same column in both frames
+// (ratio exactly 1); at 0.7 it is the column to the left in the later frame (an earlier column
+// number: the earlier frame is the brighter, either way round the lattices are taken). The same
+// with both frames' data windows 5 pixels into their display windows.
+TEST(SharedLight, FindsThePixelThatHoldsThePoint) {
+  for (const double shift : {0.3, 0.7}) {
+    Shot spec;
+    spec.floor_y = -1e4;
+    spec.sphere_start = {0, 0, -100};
+    spec.sphere_velocity = {0, 0, 0};
+    const double fx = spec.width / 2.0 / std::tan(spec.hfov_deg * M_PI / 360.0);
+    spec.camera_velocity = {shift * spec.wall_z / fx, 0, 0};
+    std::vector<GBuffer> shot = render_shot(spec, 1, 2);
+    std::vector<Image> light;
+    for (const GBuffer& g : shot) {
+      Image l(g.width(), g.height(), 3);
+      for (int y = 0; y < g.height(); ++y)
+        for (int x = 0; x < g.width(); ++x)
+          for (int c = 0; c < 3; ++c) l.at(c, x, y) = static_cast<float>(x + 1);
+      light.push_back(std::move(l));
+    }
+    const double ratio = shared_light_ratio(shot[0], light[0], shot[1], light[1]);
+    SCOPED_TRACE(shift);
+    if (shift < 0.5)
+      EXPECT_EQ(ratio, 1.0);
+    else
+      EXPECT_GT(ratio, 1.01);
+    EXPECT_DOUBLE_EQ(shared_light_ratio(shot[1], light[1], shot[0], light[0]), 1.0 / ratio);
+    for (GBuffer& g : shot) {
+      g.display_window = {-5, 0, g.width() + 5, g.height()};
+      g.camera.cx += 5;
+    }
+    EXPECT_EQ(shared_light_ratio(shot[0], light[0], shot[1], light[1]), ratio);
+  }
+}
+
 // Numerical extremes (DESIGN.md): never a NaN, never a crash.
 
 TEST(Temporal, ExtremeInputsGiveFiniteResults) {

@@ -53,10 +53,12 @@ constexpr double kMinHistoryWeight = 0.05;
 constexpr double kClipGamma = 1.0;
 constexpr double kClipRelativeFloor = 0.25;
 constexpr int kClipRadius = 1;
-// shared_light_ratio compares two frames on a lattice of about this many samples across (and
-// down), a sample being shared when the other frame's nearest pixel lies within this fraction
-// of its depth of it (static points; a moving object or noise in the depth pass only thins
-// the sample), and says nothing from fewer shared samples than this.
+// shared_light_ratio compares two frames on lattices of each with this many samples across the
+// square root of its area (a stride of a whole number of samples: at least this many squared),
+// a sample being shared when the other frame's sample at its point lies within this fraction
+// of the depth predicted (static points: a moving object or noise in the depth pass mostly
+// thins the sample, unless it moved to where a static point would be), and says nothing from
+// fewer shared samples than this.
 constexpr int kSharedLattice = 64;
 constexpr double kSharedDepthTolerance = 0.02;
 constexpr int kMinShared = 16;
@@ -480,10 +482,12 @@ Image temporal_ema(const GBuffer& current, const Image& current_indirect, const 
   return out;
 }
 
-double shared_light_ratio(const GBuffer& a, const Image& a_light, const GBuffer& b,
-                          const Image& b_light) {
-  check_light(a, a_light, "light");
-  check_light(b, b_light, "light");
+namespace {
+
+// One direction of shared_light_ratio: over the lattice of `a`'s samples that `b` shows too,
+// adds a's light to *sum_a and b's at the same points to *sum_b; returns how many there were.
+int add_shared_light(const GBuffer& a, const Image& a_light, const GBuffer& b, const Image& b_light,
+                     double* sum_a, double* sum_b) {
   const Mat4d to_b = camera_to_camera(a, b);
   const double ax = a.data_window.x0 - a.display_window.x0,
                ay = a.data_window.y0 - a.display_window.y0,
@@ -492,7 +496,6 @@ double shared_light_ratio(const GBuffer& a, const Image& a_light, const GBuffer&
   const int w = a.width(), h = a.height();
   const int stride =
       std::max(1, static_cast<int>(std::sqrt(static_cast<double>(w) * h) / kSharedLattice));
-  double sum_a = 0, sum_b = 0;
   int shared = 0;
   for (int y = stride / 2; y < h; y += stride)
     for (int x = stride / 2; x < w; x += stride) {
@@ -502,17 +505,31 @@ double shared_light_ratio(const GBuffer& a, const Image& a_light, const GBuffer&
       if (!(p.z > 0)) continue;
       double px, py;
       b.camera.project(p, &px, &py);
+      // The sample whose pixel holds the point: the nearest centre (centres at + 0.5).
       const double fx = std::floor(px - bx), fy = std::floor(py - by);
       if (!(fx >= 0 && fy >= 0 && fx < b.width() && fy < b.height())) continue;
       const int qx = static_cast<int>(fx), qy = static_cast<int>(fy);
       const float zb = b.depth.at(0, qx, qy);
       if (!has_surface(zb) || std::fabs(zb - p.z) > kSharedDepthTolerance * p.z) continue;
       for (int c = 0; c < 3; ++c) {
-        sum_a += finite_or_zero(a_light.at(c, x, y));
-        sum_b += finite_or_zero(b_light.at(c, qx, qy));
+        *sum_a += finite_or_zero(a_light.at(c, x, y));
+        *sum_b += finite_or_zero(b_light.at(c, qx, qy));
       }
       ++shared;
     }
+  return shared;
+}
+
+}  // namespace
+
+double shared_light_ratio(const GBuffer& a, const Image& a_light, const GBuffer& b,
+                          const Image& b_light) {
+  check_light(a, a_light, "light");
+  check_light(b, b_light, "light");
+  // From both frames' lattices, so that the ratio of b to a is exactly the inverse.
+  double sum_a = 0, sum_b = 0;
+  const int shared = add_shared_light(a, a_light, b, b_light, &sum_a, &sum_b) +
+                     add_shared_light(b, b_light, a, a_light, &sum_b, &sum_a);
   if (shared < kMinShared || !(sum_a > 0) || !(sum_b > 0))
     return std::numeric_limits<double>::quiet_NaN();
   return sum_a / sum_b;
