@@ -593,6 +593,30 @@ TEST(Pipeline, MultiframeFindsALitFaceOnlyANeighbourShows) {
               sum_expected);
   EXPECT_NEAR(sum_got / sum_expected, 1.0, 0.08);
 
+  // What is left to the miss model (the window levels it): with --miss frame every miss is the
+  // cube's and its shares sum to its weight, so frame 1's shares fall by the lit face's share
+  // of its hemisphere, the rays found there, and nowhere rise.
+  {
+    GiSettings framed = s;
+    framed.miss = MissMode::kFrame;
+    const Pipeline p(seq, framed);
+    const Pipeline::TracedLight fa = p.trace_light(a), fb = p.trace_light(b);
+    ASSERT_EQ(fa.miss_shares.channels(), 3);
+    Image continued, continued_coverage, left;
+    ASSERT_TRUE(p.continue_light(a, {&fa, &fb}, 0, &continued, &continued_coverage, &left));
+    ASSERT_EQ(left.channels(), 3);
+    for (int g = 0; g < 3; ++g)
+      for (std::size_t i = 0; i < left.plane_size(); ++i)
+        ASSERT_LE(left.plane(g)[i], fa.miss_shares.plane(g)[i] + 1e-6f) << g << " at " << i;
+    double found = 0, lit = 0;
+    for (int y = 0; y < 6; ++y)
+      for (int x = w / 4; x < 3 * w / 4; x += 2) {
+        for (int g = 0; g < 3; ++g) found += fa.miss_shares.at(g, x, y) - left.at(g, x, y);
+        lit += expected(point[static_cast<std::size_t>(y) * w + x]);
+      }
+    EXPECT_NEAR(found / lit, 1.0, 0.08);
+  }
+
   // A neighbour with the frame's own camera adds nothing.
   GBuffer still = b;
   still.frame = 1;

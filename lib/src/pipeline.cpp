@@ -274,6 +274,22 @@ GBuffer grid_gbuffer(const GBuffer& g, const detail::TraceGrid& grid) {
   return out;
 }
 
+// The miss model's cube faces in three groups: the sides (right, left, forward, back), up and
+// down (TracedLight::miss_colours).
+constexpr int kFaceGroup[detail::kCubeFaces] = {0, 0, 1, 2, 0, 0};
+
+// A tracer's cube shares (6 planes) summed by group, one plane each, so that one pass of the
+// denoiser carries them.
+Image grouped_shares(const Image& shares) {
+  Image grouped(shares.width(), shares.height(), 3);
+  for (int f = 0; f < detail::kCubeFaces; ++f) {
+    const float* in = shares.plane(f);
+    float* to = grouped.plane(kFaceGroup[f]);
+    for (std::size_t p = 0; p < shares.plane_size(); ++p) to[p] += in[p];
+  }
+  return grouped;
+}
+
 // The denoiser's pyramid level of a trace scale (1 -> 0, 2 -> 1, 4 -> 2, 8 -> 3).
 int pyramid_level(int scale) {
   int level = 0;
@@ -340,23 +356,15 @@ Pipeline::TracedLight Pipeline::trace_light(const GBuffer& g) const {
       window ? &cube : nullptr, window ? &shares : nullptr, window ? &out.reflected : nullptr);
   out.light = impl_->denoise_on_grid(g, std::move(out.light));
   if (shares.channels() != detail::kCubeFaces) return out;
-  // Three groups of faces, one plane each, so that one pass of the denoiser carries them: the
-  // sides (right, left, forward, back), up and down.
-  constexpr int kGroup[detail::kCubeFaces] = {0, 0, 1, 2, 0, 0};
-  Image grouped(shares.width(), shares.height(), 3);
   double face_total[detail::kCubeFaces] = {};
   for (int f = 0; f < detail::kCubeFaces; ++f) {
     const float* in = shares.plane(f);
-    float* to = grouped.plane(kGroup[f]);
-    for (std::size_t p = 0; p < shares.plane_size(); ++p) {
-      to[p] += in[p];
-      face_total[f] += in[p];
-    }
+    for (std::size_t p = 0; p < shares.plane_size(); ++p) face_total[f] += in[p];
   }
   for (int group = 0; group < 3; ++group) {
     double weight = 0, colour[3] = {};
     for (int f = 0; f < detail::kCubeFaces; ++f) {
-      if (kGroup[f] != group) continue;
+      if (kFaceGroup[f] != group) continue;
       weight += face_total[f];
       for (int c = 0; c < 3; ++c) colour[c] += face_total[f] * cube[f][c];
     }
@@ -366,11 +374,12 @@ Pipeline::TracedLight Pipeline::trace_light(const GBuffer& g) const {
   }
   // Denoised as the light is (the denoiser's weights do not depend on what it filters), so
   // that a change of colours moves the denoised light as it would have moved the traced one.
-  out.miss_shares = impl_->denoise_on_grid(g, std::move(grouped));
+  out.miss_shares = impl_->denoise_on_grid(g, grouped_shares(shares));
   return out;
 }
 
-std::vector<Image> Pipeline::window_lights(const std::vector<const TracedLight*>& window) const {
+std::vector<Image> Pipeline::window_lights(const std::vector<const TracedLight*>& window,
+                                           std::vector<MissColours>* changes) const {
   // A frame's misses take the mean colours of the window's frames lit as it is (the surfaces
   // both show reflecting the same light to kSameLight, either way), over those with misses in
   // each group: the view decides which surroundings a border shows, and the frames lit alike
@@ -392,10 +401,11 @@ std::vector<Image> Pipeline::window_lights(const std::vector<const TracedLight*>
     }
   }
   std::vector<Image> out;
+  if (changes) changes->assign(n, MissColours{});
   for (std::size_t i = 0; i < n; ++i) {
     const TracedLight* t = window[i];
     Image light = t->light;
-    float delta[3][3] = {};
+    MissColours delta{};
     bool any = false;
     if (levels(*t))
       for (int g = 0; g < 3; ++g) {
@@ -411,6 +421,7 @@ std::vector<Image> Pipeline::window_lights(const std::vector<const TracedLight*>
           delta[g][c] = static_cast<float>(sum[c] / count - t->miss_colours[g][c]);
         any = any || count > 1;
       }
+    if (changes && any) (*changes)[i] = delta;
     if (any)
       detail::parallel_for_rows(light.height(), [&](int y) {
         const std::size_t row = static_cast<std::size_t>(y) * light.width();
@@ -457,7 +468,7 @@ Image Pipeline::indirect_light(const GBuffer& g, Image* coverage) const {
 }
 
 bool Pipeline::continue_light(const GBuffer& g, const std::vector<const TracedLight*>& window,
-                              int center, Image* light, Image* coverage) const {
+                              int center, Image* light, Image* coverage, Image* miss_shares) const {
   std::vector<const detail::FrameTrace*> frames;
   std::vector<const Image*> lights;
   int c = -1;
@@ -469,11 +480,15 @@ bool Pipeline::continue_light(const GBuffer& g, const std::vector<const TracedLi
   }
   if (c < 0) return false;
   detail::ContinuationReport report;
-  const bool continued =
-      detail::continue_rays(frames, lights, c, impl_->settings, light, coverage, &report);
+  Image shares;
+  const bool continued = detail::continue_rays(frames, lights, c, impl_->settings, light, coverage,
+                                               miss_shares ? &shares : nullptr, &report);
   log_info(report.describe(frames[c]->frame));
-  if (continued) *light = impl_->denoise_on_grid(g, std::move(*light));  // as trace_light's
-  return continued;
+  if (!continued) return false;
+  *light = impl_->denoise_on_grid(g, std::move(*light));  // as trace_light's
+  if (miss_shares && shares.channels() == detail::kCubeFaces)
+    *miss_shares = impl_->denoise_on_grid(g, grouped_shares(shares));
+  return true;
 }
 
 std::string Pipeline::describe_misses(const GBuffer& g) const {

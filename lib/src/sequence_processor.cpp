@@ -456,22 +456,33 @@ class Processor {
         *convert_ms += ms_since(start);
       }
       // Each frame's light with the misses' colours the window's mean, then filtered.
-      const std::vector<Image> levelled = pipeline_.window_lights(lit_frames);
+      std::vector<Pipeline::MissColours> changes;
+      const std::vector<Image> levelled = pipeline_.window_lights(lit_frames, &changes);
       std::vector<const Image*> light;
       for (const Image& l : levelled) light.push_back(&l);
       Image filtered = temporal_window(frames, light, center, radius_);
-      Image continued, continued_coverage;
-      const bool multiframe =
-          pipeline_.plan().multiframe > 0 &&
-          pipeline_.continue_light(*lit.g, traced, traced_center, &continued, &continued_coverage);
+      Image continued, continued_coverage, continued_shares;
+      const bool multiframe = pipeline_.plan().multiframe > 0 &&
+                              pipeline_.continue_light(*lit.g, traced, traced_center, &continued,
+                                                       &continued_coverage, &continued_shares);
       if (multiframe) {
         // The window filters each frame's own light; what continuing this frame's rays changed
-        // in it is added after.
+        // in it is added after. The rays it found surfaces for are no longer misses: the
+        // levelling their shares had is taken back.
+        const Image& shares = lit.traced.miss_shares;
+        const bool relevel = shares.channels() == 3 && continued_shares.channels() == 3 &&
+                             continued_shares.plane_size() == filtered.plane_size();
+        const Pipeline::MissColours& change = changes[center];
         for (int c = 0; c < 3; ++c) {
           float* out = filtered.plane(c);
           const float *with = continued.plane(c), *without = lit.traced.light.plane(c);
-          for (std::size_t i = 0; i < filtered.plane_size(); ++i)
-            out[i] = std::max(out[i] + (with[i] - without[i]), 0.0f);
+          for (std::size_t i = 0; i < filtered.plane_size(); ++i) {
+            float found = 0;
+            if (relevel)
+              for (int g = 0; g < 3; ++g)
+                found += (shares.plane(g)[i] - continued_shares.plane(g)[i]) * change[g][c];
+            out[i] = std::max(out[i] + (with[i] - without[i]) - found, 0.0f);
+          }
         }
       }
       indirect = pipeline_.finish_light(*lit.g, filtered);

@@ -82,6 +82,8 @@ class Pipeline {
   // The light as traced (misses and bounces included) and denoised, at the trace grid's
   // resolution, with the grid's geometry as a G-buffer in grid units (depth, normals, motion and
   // camera; windows from (0, 0)): what the temporal stage filters.
+  // RGB per group of the miss model's cube faces: sideways, up, down.
+  using MissColours = std::array<std::array<float, 3>, 3>;
   struct TracedLight {
     GBuffer grid;
     Image light;     // 3 channels, the grid's size
@@ -92,7 +94,7 @@ class Pipeline {
     // last bounce's misses heading sideways, up and down (RGB each; the sides' four faces
     // weighted by their shares over the frame), and each trace sample's shares of those three,
     // denoised as the light is (3 channels; empty when the plan has no window).
-    std::array<std::array<float, 3>, 3> miss_colours{};
+    MissColours miss_colours{};
     std::array<float, 3> miss_weight{};  // each group's share of the frame's misses (0: none)
     Image miss_shares;
     Image reflected;  // 3 channels, the grid's size: the light its surfaces reflect
@@ -107,15 +109,20 @@ class Pipeline {
   // agree. Two frames are lit alike when the surfaces both show reflect the same light, to
   // 1.25x (detail::shared_light_ratio): a lamp entering the view changes what a frame shows, a
   // flash changes the light of what both show; frames that share no surface are not. Frames
-  // without shares are as they are.
-  std::vector<Image> window_lights(const std::vector<const TracedLight*>& window) const;
+  // without shares are as they are. With `changes`, each frame's levelled colours minus its own
+  // (0 where it was left as it is): what its light moved by per unit of its shares.
+  std::vector<Image> window_lights(const std::vector<const TracedLight*>& window,
+                                   std::vector<MissColours>* changes = nullptr) const;
 
   // Plan::multiframe: TracedLight::light and ::coverage of window[center] (frame `frame`) with
   // its missed rays continued in the other frames of `window` (TracedLight of each, ascending
   // frame order, within Plan::multiframe frames of the centre). False, and nothing written,
   // when none could be (lib/src/gi/multiframe.h); -v reports how many were and found a surface.
+  // With `miss_shares`, the shares of the misses left (as TracedLight::miss_shares: grouped,
+  // denoised as the light is).
   bool continue_light(const GBuffer& frame, const std::vector<const TracedLight*>& window,
-                      int center, Image* light, Image* coverage) const;
+                      int center, Image* light, Image* coverage,
+                      Image* miss_shares = nullptr) const;
 
   // Light on the trace grid (temporally filtered or not) carried to the frame's resolution by
   // the denoiser's bilateral upsampling.

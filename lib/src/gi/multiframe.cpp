@@ -260,7 +260,7 @@ std::string ContinuationReport::describe(int frame) const {
 
 bool continue_rays(const std::vector<const FrameTrace*>& frames,
                    const std::vector<const Image*>& light, int center, const GiSettings& settings,
-                   Image* out, Image* coverage, ContinuationReport* report) {
+                   Image* out, Image* coverage, Image* shares, ContinuationReport* report) {
   const FrameTrace& self = *frames[center];
   ContinuationReport local;
   ContinuationReport& r = report ? *report : local;
@@ -369,6 +369,7 @@ bool continue_rays(const std::vector<const FrameTrace*>& frames,
   const ContinuedHits hits(self, std::move(miss), std::move(env), std::move(cube),
                            std::move(foreign));
   *out = gather_bounces(grid, hits, settings.bounces, self.misses, coverage);
+  if (shares) *shares = hits.cube();
   return true;
 }
 

@@ -75,11 +75,12 @@ struct FrameTrace {
 // Frame frames[center]'s light on its trace grid with its missed rays continued in the other
 // frames (in ascending frame order, each with its own light on its grid, before any temporal
 // filter), after `settings.bounces` gathers, into *out; with `coverage`, gather_bounces'
-// coverage, a continued ray that found a surface counting as traced. False, and nothing
+// coverage, a continued ray that found a surface counting as traced; with `shares`, the cube
+// shares the rays still missed leave to the miss model (WeightedHits::cube). False, and nothing
 // written, when nothing changed: no missed rays, no camera with a world transform, no
 // neighbour whose camera differs from the centre's, or no continued ray found a surface.
 bool continue_rays(const std::vector<const FrameTrace*>& frames,
                    const std::vector<const Image*>& light, int center, const GiSettings& settings,
-                   Image* out, Image* coverage, ContinuationReport* report);
+                   Image* out, Image* coverage, Image* shares, ContinuationReport* report);
 
 }  // namespace ssgi::detail
