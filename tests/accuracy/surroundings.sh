@@ -3,7 +3,7 @@
 # miss model's guess at what the frame does not show. For each procedural scene of the training
 # set, renders once into the training cache what surrounds the camera at one frame (scenes.py
 # --panorama: lat-long maps from the camera's position and from the mean position of the
-# surfaces it sees, 256 samples), takes the light their
+# surfaces it sees, 256 samples times the scene's SAMPLES_FACTOR), takes the light their
 # surfaces send (Combined - Env - Emit: no sky and no emitter's own emission, which Cycles puts
 # in the direct pass and ssgi's misses leave out), and runs ssgi on that frame without the
 # temporal stage three times: with its miss model, and with every miss looking either map up in
@@ -11,8 +11,8 @@
 # surface a ray leaves would see (parallax: a wall near the camera fills half the camera's map
 # and a small part of what the room's other surfaces see), so those columns say how well the
 # surroundings known from one point would do, not what perfect knowledge would. Prints a
-# markdown table per scene: the oracle ambient, ssgi's relRMSE and level with its miss model,
-# and with each map (truth_error's columns for that frame). Not run by ctest: needs blender and
+# markdown table, a row per scene (the oracle ambient, ssgi's relRMSE and level with its miss
+# model, and with each map: truth_error's columns for that frame) and their means. Not run by ctest: needs blender and
 # the training cache (training/render.sh).
 # Usage: tests/accuracy/surroundings.sh [BUILD_DIR] [-- extra ssgi options]
 # Environment: SSGI_SURROUNDINGS_FRAME (default 4), and training.sh's SSGI_TRAINING_SCENES,

@@ -44,12 +44,13 @@ Image temporal_window(const std::vector<const GBuffer*>& frames,
                       const std::vector<const Image*>& indirect, int center, int radius);
 
 // How much brighter frame `a` is than frame `b` where they show the same surfaces: over a
-// lattice of each frame's surface pixels (at least 64 x 64) that the other shows too (static
-// points carried through the two cameras, the other frame's sample at the point within 2% of
-// the depth predicted), the sum of a's `a_light` over that of b's `b_light` at the same points
-// (R + G + B; 3-channel images over each frame's data window). Symmetric: b against a is the
-// inverse. NaN when they share fewer than 16 samples or either sum is not positive: a cut, or a
-// view that moved on. Throws Error(kInternal) when an image is not its frame's size.
+// lattice of each frame's surface pixels (about 64 x 64, all of a smaller grid) that the other
+// shows too (static points carried through the two cameras, the other frame's sample at the
+// point within 2% of the depth predicted), the sum of a's `a_light` over that of b's `b_light`
+// at the same points (R + G + B; 3-channel images over each frame's data window). Symmetric: b
+// against a is the inverse. NaN when they share fewer than 16 samples or either sum is not
+// positive: a cut, or a view that moved on. Throws Error(kInternal) when an image is not its
+// frame's size.
 double shared_light_ratio(const GBuffer& a, const Image& a_light, const GBuffer& b,
                           const Image& b_light);
 

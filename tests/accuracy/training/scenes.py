@@ -712,6 +712,8 @@ def main():
     render_settings(scene, samples, frames)
     world = SCENES[name][0](frames)
     os.makedirs(out_dir, exist_ok=True)
+    if opts.get("--panorama-at", "camera") not in ("camera", "surfaces"):
+        raise SystemExit("scenes.py: --panorama-at takes camera or surfaces")
     if "--panorama" in opts:
         render_panorama(scene, name, int(opts["--panorama"]), out_dir,
                         opts.get("--panorama-at", "camera"))
