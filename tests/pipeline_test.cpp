@@ -808,9 +808,9 @@ TEST(Pipeline, TheMissModelClosesAClosedBox) {
 // 0.4 (the surfaces they share within 1.25x of each other): the brighter border gives the
 // brighter misses, and each frame's light moves by its shares of them x (the mean - its own),
 // down for the first, up for the last. The same when the middle frame shows a block near the
-// camera reflecting 4 (a lamp entering the view: its mean light over twice the others', the surfaces
-// it shares with them as theirs). Lit 0.2, 0.5 and 1.1 everywhere (a change of lighting, not
-// of view), each keeps its light as it is.
+// camera reflecting 4 (a lamp entering the view: its mean light over twice the others', the
+// surfaces it shares with them as theirs). Lit 0.2, 0.5 and 1.1 everywhere (a change of lighting,
+// not of view), each keeps its light as it is.
 TEST(Pipeline, TheWindowLevelsTheMissesOfFramesLitAlike) {
   GiSettings s;
   s.bounces = 1;
