@@ -754,6 +754,16 @@ TEST(Pipeline, ColourTransformsTouchLightAndAlbedoOnly) {
   EXPECT_GT(changed, 0.01);
 }
 
+// One bounce, the miss model, no denoiser: what the closed box's known answers measure.
+GiSettings closed_box_settings(TemporalMode temporal) {
+  GiSettings s;
+  s.bounces = 1;
+  s.miss = MissMode::kAuto;
+  s.denoise = DenoiseMode::kNone;
+  s.temporal = temporal;
+  return s;
+}
+
 // A camera of 120 degrees (104 down) at the centre of a closed cube of half-size 1, drawn into
 // blank_scene: each pixel the nearest face (the largest component of its ray reaches |1|
 // first), its normal facing the camera; no light.
@@ -779,11 +789,7 @@ Frame closed_box(const GiSettings& settings) {
 // much as the sides; forward 0.89, the wall ahead being mostly away from the border), so a miss
 // brings the box's light: one bounce is 0.5 to 4% (measured 0.484 at worst).
 TEST(Pipeline, TheMissModelClosesAClosedBox) {
-  GiSettings base;
-  base.bounces = 1;
-  base.miss = MissMode::kAuto;
-  base.denoise = DenoiseMode::kNone;
-  base.temporal = TemporalMode::kNone;
+  const GiSettings base = closed_box_settings(TemporalMode::kNone);
   Frame f = closed_box(base);
   GBuffer& g = f.g;
   g.direct = Image(g.width(), g.height(), 3, 0.5f);  // this layout's direct light has the albedo
@@ -812,11 +818,7 @@ TEST(Pipeline, TheMissModelClosesAClosedBox) {
 // surfaces it shares with them as theirs). Lit 0.2, 0.5 and 1.1 everywhere (a change of lighting,
 // not of view), each keeps its light as it is.
 TEST(Pipeline, TheWindowLevelsTheMissesOfFramesLitAlike) {
-  GiSettings s;
-  s.bounces = 1;
-  s.miss = MissMode::kAuto;
-  s.denoise = DenoiseMode::kNone;
-  s.temporal = TemporalMode::kWindow;
+  GiSettings s = closed_box_settings(TemporalMode::kWindow);
   s.trace_scale = 1;
   Frame f = closed_box(s);
   const GBuffer& g = f.g;
