@@ -79,11 +79,12 @@ class Pipeline {
   // The run's colour spaces: read_gbuffer takes it, and the outputs go through it.
   const ColorManagement& color() const;
 
+  // RGB per group of the miss model's cube faces: sideways, up, down.
+  using MissColours = std::array<std::array<float, 3>, 3>;
+
   // The light as traced (misses and bounces included) and denoised, at the trace grid's
   // resolution, with the grid's geometry as a G-buffer in grid units (depth, normals, motion and
   // camera; windows from (0, 0)): what the temporal stage filters.
-  // RGB per group of the miss model's cube faces: sideways, up, down.
-  using MissColours = std::array<std::array<float, 3>, 3>;
   struct TracedLight {
     GBuffer grid;
     Image light;     // 3 channels, the grid's size
