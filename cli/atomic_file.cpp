@@ -3,8 +3,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include "io/temporary_files.h"
 #include "ssgi/error.h"
-#include "ssgi/temporary_files.h"
 
 namespace ssgi_cli {
 

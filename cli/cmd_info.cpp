@@ -7,11 +7,11 @@
 
 #include "commands.h"
 #include "run_options.h"
+#include "simd.h"
 #include "ssgi/color.h"
 #include "ssgi/io.h"
 #include "ssgi/layout.h"
 #include "ssgi/pipeline.h"
-#include "ssgi/simd.h"
 #include "ssgi/threads.h"
 
 namespace ssgi_cli {

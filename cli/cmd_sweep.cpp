@@ -13,12 +13,12 @@
 
 #include "atomic_file.h"
 #include "commands.h"
+#include "io/temporary_files.h"
 #include "run_options.h"
 #include "ssgi/compare.h"
 #include "ssgi/error.h"
 #include "ssgi/io.h"
 #include "ssgi/log.h"
-#include "ssgi/temporary_files.h"
 #include "ssgi/threads.h"
 #include "sweep_plot.h"
 #include "truth_layer.h"

@@ -8,8 +8,8 @@
 #include <system_error>
 
 #include "atomic_file.h"
+#include "io/temporary_files.h"
 #include "ssgi/error.h"
-#include "ssgi/temporary_files.h"
 
 namespace ssgi_cli {
 namespace {

@@ -8,8 +8,8 @@
 #include <string>
 
 #include "commands.h"
+#include "io/temporary_files.h"
 #include "ssgi/error.h"
-#include "ssgi/temporary_files.h"
 #include "ssgi/version.h"
 
 namespace {

@@ -16,10 +16,10 @@
 
 #include "atomic_file.h"
 #include "commands.h"
+#include "io/temporary_files.h"
+#include "simd.h"
 #include "ssgi/error.h"
 #include "ssgi/log.h"
-#include "ssgi/simd.h"
-#include "ssgi/temporary_files.h"
 #include "ssgi/threads.h"
 
 namespace ssgi_cli {

@@ -11,11 +11,11 @@
 #include <vector>
 
 #include "fast_malloc.h"
+#include "memory.h"
+#include "simd.h"
 #include "ssgi/error.h"
 #include "ssgi/io.h"
 #include "ssgi/log.h"
-#include "ssgi/memory.h"
-#include "ssgi/simd.h"
 
 namespace ssgi_cli {
 namespace {

@@ -7,7 +7,7 @@
 #include <filesystem>
 #include <string>
 
-#include "reference.h"
+#include "reference/reference.h"
 #include "ssgi/io.h"
 #include "ssgi/pipeline.h"
 #include "ssgi/threads.h"

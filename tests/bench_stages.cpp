@@ -13,14 +13,14 @@
 #include <string>
 #include <vector>
 
-#include "composite.h"
-#include "denoise.h"
-#include "denoise_kernels.h"
-#include "environment.h"
-#include "gather.h"
-#include "misses.h"
-#include "slice_kernel.h"
-#include "slices.h"
+#include "gi/composite.h"
+#include "gi/denoise.h"
+#include "gi/denoise_kernels.h"
+#include "gi/environment.h"
+#include "gi/gather.h"
+#include "gi/misses.h"
+#include "gi/slice_kernel.h"
+#include "gi/slices.h"
 #include "ssgi/io.h"
 #include "ssgi/pipeline.h"
 #include "ssgi/threads.h"

@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "camera_header.h"
+#include "io/camera_header.h"
 #include "ssgi/error.h"
 
 namespace ssgi {

@@ -1,6 +1,6 @@
 // The denoise pyramid: constants stay constant, noise falls, edges and background hold, and
 // any size, any value and any thread count give a finite, reproducible result.
-#include "denoise.h"
+#include "gi/denoise.h"
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>

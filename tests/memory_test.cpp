@@ -1,7 +1,7 @@
 // --max-memory and the scheduler's limits: parsing sizes, reading limits from fake cgroup trees
 // and Slurm environments, the refusal of a run over its limit, and the estimate against the
 // peak resident size the built CLI reaches (getrusage of its process).
-#include "ssgi/memory.h"
+#include "memory.h"
 
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>

@@ -14,14 +14,16 @@
 #include <tuple>
 #include <vector>
 
-#include "directions.h"
 #include "fixture_frame.h"
+#include "frame_stages.h"
+#include "gi/directions.h"
+#include "gi/misses.h"
+#include "gi/surface_model.h"
+#include "gi/temporal.h"
 #include "gtest/gtest.h"
-#include "input_frame.h"
-#include "misses.h"
+#include "io/input_frame.h"
 #include "ssgi/color.h"
 #include "ssgi/io.h"
-#include "surface_model.h"
 
 namespace ssgi {
 namespace {
@@ -549,10 +551,11 @@ TEST(Pipeline, MultiframeFindsALitFaceOnlyANeighbourShows) {
   seq.frames = seq.frames_on_disk = {1, 2};
   const Pipeline pipeline(seq, s);
   ASSERT_EQ(pipeline.plan().multiframe, s.temporal_radius);
-  const Pipeline::TracedLight ta = pipeline.trace_light(a), tb = pipeline.trace_light(b);
+  const detail::TracedLight ta = pipeline.stages().trace_light(a),
+                            tb = pipeline.stages().trace_light(b);
   for (float v : ta.light.data()) ASSERT_EQ(v, 0.0f);  // alone it sees no light
   Image light, coverage;
-  ASSERT_TRUE(pipeline.continue_light(a, {&ta, &tb}, 0, &light, &coverage));
+  ASSERT_TRUE(pipeline.stages().continue_light(a, {&ta, &tb}, 0, &light, &coverage));
 
   // The expected share, over a grid of cosine-weighted directions.
   const Camera& camera_b = b.camera;
@@ -600,10 +603,11 @@ TEST(Pipeline, MultiframeFindsALitFaceOnlyANeighbourShows) {
     GiSettings framed = s;
     framed.miss = MissMode::kFrame;
     const Pipeline p(seq, framed);
-    const Pipeline::TracedLight fa = p.trace_light(a), fb = p.trace_light(b);
+    const detail::TracedLight fa = p.stages().trace_light(a), fb = p.stages().trace_light(b);
     ASSERT_EQ(fa.miss_shares.channels(), 3);
     Image continued, continued_coverage, left;
-    ASSERT_TRUE(p.continue_light(a, {&fa, &fb}, 0, &continued, &continued_coverage, &left));
+    ASSERT_TRUE(
+        p.stages().continue_light(a, {&fa, &fb}, 0, &continued, &continued_coverage, &left));
     ASSERT_EQ(left.channels(), 3);
     for (int g = 0; g < 3; ++g)
       for (std::size_t i = 0; i < left.plane_size(); ++i)
@@ -620,8 +624,8 @@ TEST(Pipeline, MultiframeFindsALitFaceOnlyANeighbourShows) {
   // A neighbour with the frame's own camera adds nothing.
   GBuffer still = b;
   still.frame = 1;
-  const Pipeline::TracedLight ts = pipeline.trace_light(still);
-  EXPECT_FALSE(pipeline.continue_light(still, {&ts, &tb}, 0, &light, &coverage));
+  const detail::TracedLight ts = pipeline.stages().trace_light(still);
+  EXPECT_FALSE(pipeline.stages().continue_light(still, {&ts, &tb}, 0, &light, &coverage));
 }
 
 // Settings that take the tracers to their converged answer on a small analytic scene: every
@@ -851,8 +855,8 @@ TEST(Pipeline, TheWindowLevelsTheMissesOfFramesLitAlike) {
     return sum / static_cast<double>(image.data().size());
   };
   const auto expect_levelled = [&](const Pipeline& pipeline,
-                                   const std::vector<Pipeline::TracedLight>& t) {
-    const std::vector<Image> levelled = pipeline.window_lights({&t[0], &t[1], &t[2]});
+                                   const std::vector<detail::TracedLight>& t) {
+    const std::vector<Image> levelled = detail::level_window_misses({&t[0], &t[1], &t[2]});
     ASSERT_EQ(levelled.size(), 3u);
     EXPECT_GT(t[0].miss_colours[0][1], t[2].miss_colours[0][1] + 0.05f);
     for (int k = 0; k < 3; ++k) {
@@ -883,25 +887,26 @@ TEST(Pipeline, TheWindowLevelsTheMissesOfFramesLitAlike) {
     ASSERT_EQ(pipeline.plan().temporal, TemporalMode::kWindow);
     {
       SCOPED_TRACE("lit alike, other borders");
-      expect_levelled(pipeline, {pipeline.trace_light(lit(1, 0.5f, 0.75f)),
-                                 pipeline.trace_light(lit(2, 0.5f, 0.5f)),
-                                 pipeline.trace_light(lit(3, 0.5f, 0.4f))});
+      expect_levelled(pipeline, {pipeline.stages().trace_light(lit(1, 0.5f, 0.75f)),
+                                 pipeline.stages().trace_light(lit(2, 0.5f, 0.5f)),
+                                 pipeline.stages().trace_light(lit(3, 0.5f, 0.4f))});
     }
     {
       SCOPED_TRACE("lit alike, a lamp in the view");
-      const std::vector<Pipeline::TracedLight> t = {
-          pipeline.trace_light(lit(1, 0.5f, 0.75f)),
-          pipeline.trace_light(with_lamp(lit(2, 0.5f, 0.5f))),
-          pipeline.trace_light(lit(3, 0.5f, 0.4f))};
+      const std::vector<detail::TracedLight> t = {
+          pipeline.stages().trace_light(lit(1, 0.5f, 0.75f)),
+          pipeline.stages().trace_light(with_lamp(lit(2, 0.5f, 0.5f))),
+          pipeline.stages().trace_light(lit(3, 0.5f, 0.4f))};
       ASSERT_GT(mean_of(t[1].reflected), 2.0 * mean_of(t[0].reflected));
       expect_levelled(pipeline, t);
     }
     {
       SCOPED_TRACE("lit otherwise");
-      const std::vector<Pipeline::TracedLight> t = {pipeline.trace_light(lit(1, 0.2f, 0.2f)),
-                                                    pipeline.trace_light(lit(2, 0.5f, 0.5f)),
-                                                    pipeline.trace_light(lit(3, 1.1f, 1.1f))};
-      const std::vector<Image> levelled = pipeline.window_lights({&t[0], &t[1], &t[2]});
+      const std::vector<detail::TracedLight> t = {
+          pipeline.stages().trace_light(lit(1, 0.2f, 0.2f)),
+          pipeline.stages().trace_light(lit(2, 0.5f, 0.5f)),
+          pipeline.stages().trace_light(lit(3, 1.1f, 1.1f))};
+      const std::vector<Image> levelled = detail::level_window_misses({&t[0], &t[1], &t[2]});
       for (int k = 0; k < 3; ++k) EXPECT_EQ(levelled[k].data(), t[k].light.data()) << k;
     }
   }

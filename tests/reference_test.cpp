@@ -1,7 +1,7 @@
 // The Embree reference against analytic answers and against a slow walk through the surface
 // model, and the march converging to it as rays and steps grow (testdata/README.md describes
 // each fixture).
-#include "reference.h"
+#include "reference/reference.h"
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -13,15 +13,15 @@
 #include <string>
 #include <vector>
 
-#include "composite.h"
-#include "directions.h"
 #include "fixture_frame.h"
-#include "gather.h"
-#include "misses.h"
+#include "gi/composite.h"
+#include "gi/directions.h"
+#include "gi/gather.h"
+#include "gi/misses.h"
+#include "gi/surface_model.h"
 #include "ssgi/compare.h"
 #include "ssgi/io.h"
 #include "ssgi/pipeline.h"
-#include "surface_model.h"
 
 namespace ssgi {
 namespace {

@@ -12,8 +12,8 @@
 #include <system_error>
 #include <vector>
 
+#include "io/temporary_files.h"
 #include "ssgi/error.h"
-#include "ssgi/temporary_files.h"
 
 namespace ssgi {
 namespace {

@@ -2,7 +2,7 @@
 // (ssgi::simd_targets: AVX2, SSE4, ... and Highway's portable ones): bit for bit, on odd sizes
 // (every tail length) and on the values that take the kernels' other branches (background,
 // NaN, unknown normals, back-facing normals, overflowing depth differences).
-#include "ssgi/simd.h"
+#include "simd.h"
 
 #include <gtest/gtest.h>
 
@@ -14,8 +14,8 @@
 #include <utility>
 #include <vector>
 
-#include "denoise_kernels.h"
-#include "slice_kernel.h"
+#include "gi/denoise_kernels.h"
+#include "gi/slice_kernel.h"
 
 namespace ssgi::detail {
 namespace {

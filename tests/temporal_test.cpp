@@ -1,7 +1,7 @@
 // The temporal stage: reprojection lands where the surface point is, disocclusions leave no
 // trail, the window averages exactly and is the same whatever the chunking or thread count,
 // and the EMA's dependence on where a run starts decays as (1 - alpha)^frames.
-#include "temporal.h"
+#include "gi/temporal.h"
 
 #include <gtest/gtest.h>
 

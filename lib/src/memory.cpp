@@ -1,5 +1,5 @@
 // A run's memory limit, from --max-memory or the scheduler, and the estimate of its peak.
-#include "ssgi/memory.h"
+#include "memory.h"
 
 #include <algorithm>
 #include <cctype>
@@ -11,7 +11,7 @@
 #include <sstream>
 #include <vector>
 
-#include "reference.h"
+#include "reference/reference.h"
 #include "ssgi/error.h"
 
 namespace ssgi {

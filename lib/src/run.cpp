@@ -9,8 +9,9 @@
 #include <map>
 #include <set>
 
+#include "io/preview.h"
+#include "memory.h"
 #include "parallel.h"
-#include "preview.h"
 #include "sequence_processor.h"
 #include "ssgi/log.h"
 #include "ssgi/pipeline.h"
@@ -122,18 +123,6 @@ PipelineMemory check_memory(const RunOptions& o, const SequenceInfo& seq) {
 }
 
 }  // namespace
-
-int RunReport::failed() const {
-  int n = 0;
-  for (const FrameReport& f : frames) n += f.ok ? 0 : 1;
-  return n;
-}
-
-int RunReport::skipped() const {
-  int n = 0;
-  for (const FrameReport& f : frames) n += f.skipped ? 1 : 0;
-  return n;
-}
 
 RunReport run_sequence(const RunOptions& options, const RunCallbacks& callbacks) {
   const SequenceInfo seq = open_sequence(options.input);

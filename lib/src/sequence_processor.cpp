@@ -16,11 +16,12 @@
 #include <thread>
 #include <utility>
 
-#include "multiframe.h"
+#include "frame_stages.h"
+#include "gi/multiframe.h"
+#include "gi/temporal.h"
 #include "parallel.h"
 #include "ssgi/error.h"
 #include "ssgi/log.h"
-#include "temporal.h"
 
 namespace ssgi::detail {
 namespace {
@@ -218,14 +219,14 @@ class Processor {
   Processor(const SequenceJob& job, const RunCallbacks& callbacks)
       : job_(job),
         seq_(*job.sequence),
-        pipeline_(*job.pipeline),
+        stages_(job.pipeline->stages()),
         callbacks_(callbacks),
-        mode_(pipeline_.plan().temporal),
-        radius_(pipeline_.settings().temporal_radius),
+        mode_(stages_.plan().temporal),
+        radius_(stages_.settings().temporal_radius),
         read_twice_(job.read_twice && mode_ == TemporalMode::kWindow) {
     const int preroll =
         mode_ == TemporalMode::kEma
-            ? std::min(ema_preroll_frames(pipeline_.settings().ema_alpha, kEmaPrerollBound),
+            ? std::min(ema_preroll_frames(stages_.settings().ema_alpha, kEmaPrerollBound),
                        static_cast<int>(seq_.frames_on_disk.size()))
             : 0;
     steps_ = plan_steps(seq_, mode_, radius_, preroll, job.reuse, read_twice_);
@@ -272,7 +273,7 @@ class Processor {
     d.step = step;
     if (step.read == kNoFrame) return d;
     const auto start = Clock::now();
-    const Plan& plan = pipeline_.plan();
+    const Plan& plan = stages_.plan();
     RoleMask roles = plan.roles;
     // An input's pixels are kept for the frame's output only.
     bool keep_pixels = job_.keep_input_pixels && still_to_write(step.read, step.output);
@@ -288,8 +289,8 @@ class Processor {
       keep_pixels = report = false;
     }
     try {
-      d.frame = read_input_frame(seq_, step.read, roles, *job_.input, &pipeline_.color(),
-                                 keep_pixels, report);
+      d.frame = read_input_frame(seq_, step.read, roles, *job_.input, &stages_.color(), keep_pixels,
+                                 report);
     } catch (const Error& e) {
       d.error = error_of(e);
     } catch (const std::bad_alloc&) {
@@ -372,7 +373,7 @@ class Processor {
   std::optional<InputFrame> take(const Step& s, InputFrame frame) {
     const int n = seq_.frames[s.output];
     if (mode_ == TemporalMode::kNone) return frame;
-    Pipeline::TracedLight traced = pipeline_.trace_light(frame.g);
+    TracedLight traced = stages_.trace_light(frame.g);
     if (mode_ == TemporalMode::kEma) {
       if (s.restart) ema_valid_ = false;
       const std::vector<int>& disk = seq_.frames_on_disk;
@@ -399,10 +400,10 @@ class Processor {
     return std::nullopt;
   }
 
-  void ema_step(int index, Pipeline::TracedLight traced) {
+  void ema_step(int index, TracedLight traced) {
     const bool follows = ema_valid_ && ema_index_ == index - 1;
     ema_out_ = follows ? temporal_ema(traced.grid, traced.light, ema_grid_, ema_out_,
-                                      pipeline_.settings().ema_alpha)
+                                      stages_.settings().ema_alpha)
                        : std::move(traced.light);
     // The next step reprojects from this frame: its trace grid is all it reads.
     ema_grid_ = std::move(traced.grid);
@@ -418,8 +419,8 @@ class Processor {
     Image indirect, coverage;
     if (mode_ == TemporalMode::kWindow) {
       std::vector<const GBuffer*> frames;
-      std::vector<const Pipeline::TracedLight*> lit_frames;  // the window's, as lit
-      std::vector<const Pipeline::TracedLight*> traced;      // those multiframe reads
+      std::vector<const TracedLight*> lit_frames;  // the window's, as lit
+      std::vector<const TracedLight*> traced;      // those multiframe reads
       int center = -1, traced_center = -1;
       for (int f : seq_.frames_on_disk) {
         if (std::abs(f - n) > radius_) continue;
@@ -439,7 +440,7 @@ class Processor {
         }
         frames.push_back(&it->second.traced.grid);
         lit_frames.push_back(&it->second.traced);
-        if (std::abs(f - n) <= pipeline_.plan().multiframe) traced.push_back(&it->second.traced);
+        if (std::abs(f - n) <= stages_.plan().multiframe) traced.push_back(&it->second.traced);
       }
       Lit& lit = ring_.at(n);
       if (read_twice_) {
@@ -450,44 +451,26 @@ class Processor {
         lit.input = std::move(own->input);
       } else if (!lit.g) {
         const auto start = Clock::now();
-        RoleMask roles = pipeline_.plan().roles & ~role_bit(Role::kMotion);
+        RoleMask roles = stages_.plan().roles & ~role_bit(Role::kMotion);
         lit.g = std::make_shared<const GBuffer>(
-            gbuffer_from_input(seq_, n, roles, *job_.input, &pipeline_.color(), *lit.input));
+            gbuffer_from_input(seq_, n, roles, *job_.input, &stages_.color(), *lit.input));
         *convert_ms += ms_since(start);
       }
       // Each frame's light with the misses' colours the window's mean, then filtered.
-      std::vector<Pipeline::MissColours> changes;
-      const std::vector<Image> levelled = pipeline_.window_lights(lit_frames, &changes);
+      std::vector<MissColours> changes;
+      const std::vector<Image> levelled = level_window_misses(lit_frames, &changes);
       std::vector<const Image*> light;
       for (const Image& l : levelled) light.push_back(&l);
       Image filtered = temporal_window(frames, light, center, radius_);
       Image continued, continued_coverage, continued_shares;
-      const bool multiframe = pipeline_.plan().multiframe > 0 &&
-                              pipeline_.continue_light(*lit.g, traced, traced_center, &continued,
-                                                       &continued_coverage, &continued_shares);
-      if (multiframe) {
-        // The window filters each frame's own light; what continuing this frame's rays changed
-        // in it is added after. The rays it found surfaces for are no longer misses: the
-        // levelling their shares had is taken back.
-        const Image& shares = lit.traced.miss_shares;
-        const bool relevel = shares.channels() == 3 && continued_shares.channels() == 3 &&
-                             continued_shares.plane_size() == filtered.plane_size();
-        const Pipeline::MissColours& change = changes[center];
-        for (int c = 0; c < 3; ++c) {
-          float* out = filtered.plane(c);
-          const float *with = continued.plane(c), *without = lit.traced.light.plane(c);
-          for (std::size_t i = 0; i < filtered.plane_size(); ++i) {
-            float found = 0;
-            if (relevel)
-              for (int g = 0; g < 3; ++g)
-                found += (shares.plane(g)[i] - continued_shares.plane(g)[i]) * change[g][c];
-            out[i] = std::max(out[i] + (with[i] - without[i]) - found, 0.0f);
-          }
-        }
-      }
-      indirect = pipeline_.finish_light(*lit.g, filtered);
-      coverage = pipeline_.finish_coverage(*lit.g, lit.traced.grid,
-                                           multiframe ? continued_coverage : lit.traced.coverage);
+      const bool multiframe = stages_.plan().multiframe > 0 &&
+                              stages_.continue_light(*lit.g, traced, traced_center, &continued,
+                                                     &continued_coverage, &continued_shares);
+      if (multiframe)
+        add_continued_light(lit.traced, continued, continued_shares, changes[center], &filtered);
+      indirect = stages_.finish_light(*lit.g, filtered);
+      coverage = stages_.finish_coverage(*lit.g, lit.traced.grid,
+                                         multiframe ? continued_coverage : lit.traced.coverage);
       // The frame's own hits and missed rays served its continuation alone.
       if (lit.traced.trace) lit.traced.trace->release_own();
       // From now on the frame is only a neighbour: reprojection reads its trace grid.
@@ -500,15 +483,15 @@ class Processor {
       m->input = std::move(own->input);
       auto g = std::make_shared<const GBuffer>(std::move(own->g));
       if (mode_ == TemporalMode::kEma) {
-        indirect = pipeline_.finish_light(*g, ema_out_);
-        coverage = pipeline_.finish_coverage(*g, ema_grid_, ema_coverage_);
+        indirect = stages_.finish_light(*g, ema_out_);
+        coverage = stages_.finish_coverage(*g, ema_grid_, ema_coverage_);
       } else {
-        indirect = pipeline_.indirect_light(*g, &coverage);
+        indirect = stages_.indirect_light(*g, &coverage);
       }
       m->g = std::move(g);
     }
     m->result = std::make_shared<FrameResult>(
-        pipeline_.composite(*m->g, std::move(indirect), std::move(coverage)));
+        stages_.composite(*m->g, std::move(indirect), std::move(coverage)));
     if (seq_.context) cut_to(seq_.data_window, &m->g, m->result.get());
   }
 
@@ -562,14 +545,14 @@ class Processor {
   struct Lit {
     // Its trace grid (what reprojection reads), its own light and coverage there before
     // temporal filtering, and with multiframe what continuing rays reads.
-    Pipeline::TracedLight traced;
+    TracedLight traced;
     std::shared_ptr<const GBuffer> g;  // while it is still to be written (or converted again)
     std::shared_ptr<const DecodedInput> input;  // while it is still to be written
   };
 
   const SequenceJob& job_;
   const SequenceInfo& seq_;
-  const Pipeline& pipeline_;
+  const FrameStages& stages_;
   const RunCallbacks& callbacks_;
   const TemporalMode mode_;
   const int radius_;
@@ -607,3 +590,19 @@ RunReport process_sequence(const SequenceJob& job, const RunCallbacks& callbacks
 }
 
 }  // namespace ssgi::detail
+
+namespace ssgi {
+
+int RunReport::failed() const {
+  int n = 0;
+  for (const FrameReport& f : frames) n += f.ok ? 0 : 1;
+  return n;
+}
+
+int RunReport::skipped() const {
+  int n = 0;
+  for (const FrameReport& f : frames) n += f.skipped ? 1 : 0;
+  return n;
+}
+
+}  // namespace ssgi

@@ -7,9 +7,10 @@
 #include <string>
 #include <vector>
 
-#include "input_frame.h"
+#include "io/input_frame.h"
+#include "ssgi/io.h"
 #include "ssgi/pipeline.h"
-#include "ssgi/run.h"
+#include "ssgi/report.h"
 
 namespace ssgi::detail {
 

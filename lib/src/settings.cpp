@@ -2,8 +2,8 @@
 #include "ssgi/settings.h"
 
 #include <charconv>
+#include <cstdlib>
 
-#include "ssgi/color.h"
 #include "ssgi/error.h"
 
 namespace ssgi {
@@ -140,6 +140,12 @@ std::vector<std::pair<std::string, std::string>> describe_settings(const GiSetti
     out.emplace_back("working-space", c.working.empty() ? "scene_linear" : c.working);
   }
   return out;
+}
+
+std::string color_config_path(const ColorSettings& settings) {
+  if (!settings.config.empty()) return settings.config;
+  const char* env = std::getenv("OCIO");
+  return env ? env : "";
 }
 
 }  // namespace ssgi

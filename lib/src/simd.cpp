@@ -1,4 +1,4 @@
-#include "ssgi/simd.h"
+#include "simd.h"
 
 #include <hwy/targets.h>
 

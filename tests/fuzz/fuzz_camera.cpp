@@ -17,7 +17,7 @@
 #include <fstream>
 #include <string>
 
-#include "camera_header.h"
+#include "io/camera_header.h"
 #include "ssgi/error.h"
 #include "ssgi/log.h"
 

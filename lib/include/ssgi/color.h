@@ -13,9 +13,6 @@
 
 namespace ssgi {
 
-// The config `settings` names: its `config`, else $OCIO, else "" (none).
-std::string color_config_path(const ColorSettings& settings);
-
 class ColorManagement {
  public:
   // No config: no transform runs on EXR data; the few that must (an sRGB environment map to

@@ -1,4 +1,5 @@
-// The renderer-independent G-buffer every stage works on.
+// A frame as the stages see it: the renderer-independent G-buffer they read, and the layers
+// they make.
 #pragma once
 
 #include <cmath>
@@ -38,6 +39,17 @@ struct GBuffer {
     return depth.bytes() + normal.bytes() + albedo.bytes() + direct.bytes() + emission.bytes() +
            motion_prev.bytes() + motion_next.bytes() + beauty.bytes();
   }
+};
+
+// One frame's results, each covering the data window.
+struct FrameResult {
+  Image indirect;   // 3: diffuse indirect light without albedo (Cycles' DiffInd)
+  Image gi;         // 3: albedo x indirect
+  Image composite;  // 4: direct + emission + gi on surfaces, the input beauty elsewhere
+  // 1: the share of the indirect light that traced rays brought (1) rather than the miss
+  // model's estimate of what lies off screen or behind everything (0); 0 on background. Empty
+  // when the caller gave none to composite().
+  Image coverage;
 };
 
 }  // namespace ssgi

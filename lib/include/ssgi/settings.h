@@ -64,6 +64,9 @@ struct ColorSettings {
   std::string view;     // --view: the preview's view; empty: the display's default
 };
 
+// The config `settings` names: its `config`, else $OCIO, else "" (none).
+std::string color_config_path(const ColorSettings& settings);
+
 // Everything that decides the GI result of a frame.
 struct GiSettings {
   Tracer tracer = Tracer::kSlices;

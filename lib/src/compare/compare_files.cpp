@@ -12,7 +12,7 @@
 #include <map>
 #include <memory>
 
-#include "oiio_files.h"
+#include "io/oiio_files.h"
 #include "ssgi/compare.h"
 #include "ssgi/error.h"
 

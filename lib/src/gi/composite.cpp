@@ -1,4 +1,4 @@
-#include "composite.h"
+#include "gi/composite.h"
 
 #include <algorithm>
 #include <cmath>

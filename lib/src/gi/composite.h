@@ -2,7 +2,6 @@
 #pragma once
 
 #include "ssgi/gbuffer.h"
-#include "ssgi/pipeline.h"
 
 namespace ssgi::detail {
 

@@ -5,7 +5,7 @@
 // level is rebuilt from the one below by joint bilateral upsampling (Kopf et al. 2007) and a
 // small edge-aware blur. Every weight is a spatial term times `range_weight`, which is ~0
 // between different surfaces, so light does not cross depth edges, creases or background.
-#include "denoise.h"
+#include "gi/denoise.h"
 
 #include <algorithm>
 #include <array>
@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-#include "denoise_kernels.h"
+#include "gi/denoise_kernels.h"
 #include "parallel.h"
 #include "ssgi/error.h"
 

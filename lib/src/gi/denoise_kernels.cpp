@@ -1,11 +1,11 @@
 // The denoiser's kernels, compiled once per SIMD target (Highway's foreach_target).
-#include "denoise_kernels.h"
+#include "gi/denoise_kernels.h"
 
 #include <cstdlib>
 #include <string>
 
 #undef HWY_TARGET_INCLUDE
-#define HWY_TARGET_INCLUDE "denoise_kernels.cpp"
+#define HWY_TARGET_INCLUDE "gi/denoise_kernels.cpp"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
 #include <hwy/highway.h>
 

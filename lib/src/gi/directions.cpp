@@ -1,4 +1,4 @@
-#include "directions.h"
+#include "gi/directions.h"
 
 #include <cmath>
 

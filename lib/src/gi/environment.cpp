@@ -1,4 +1,4 @@
-#include "environment.h"
+#include "gi/environment.h"
 
 #include <OpenEXR/ImfEnvmap.h>
 #include <OpenImageIO/imageio.h>
@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "oiio_files.h"
+#include "io/oiio_files.h"
 #include "ssgi/error.h"
 #include "ssgi/log.h"
 

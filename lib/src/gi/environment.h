@@ -4,7 +4,7 @@
 #include <array>
 #include <string>
 
-#include "directions.h"
+#include "gi/directions.h"
 #include "ssgi/color.h"
 #include "ssgi/image.h"
 

@@ -1,12 +1,12 @@
-#include "march.h"
+#include "gi/march.h"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
-#include "directions.h"
+#include "gi/directions.h"
+#include "gi/surface_model.h"
 #include "parallel.h"
-#include "surface_model.h"
 
 namespace ssgi::detail {
 namespace {

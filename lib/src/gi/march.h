@@ -6,12 +6,12 @@
 #include <cstdint>
 #include <vector>
 
-#include "directions.h"
-#include "environment.h"
-#include "misses.h"
+#include "gi/directions.h"
+#include "gi/environment.h"
+#include "gi/misses.h"
+#include "gi/surface_model.h"
 #include "ssgi/gbuffer.h"
 #include "ssgi/settings.h"
-#include "surface_model.h"
 
 namespace ssgi::detail {
 

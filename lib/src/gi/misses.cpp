@@ -1,10 +1,10 @@
-#include "misses.h"
+#include "gi/misses.h"
 
 #include <cmath>
 #include <cstdio>
 #include <vector>
 
-#include "gather.h"
+#include "gi/trace_grid.h"
 #include "parallel.h"
 
 namespace ssgi::detail {

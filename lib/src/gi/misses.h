@@ -37,8 +37,8 @@
 #include <cstddef>
 #include <string>
 
-#include "directions.h"
-#include "environment.h"
+#include "gi/directions.h"
+#include "gi/environment.h"
 #include "ssgi/gbuffer.h"
 #include "ssgi/settings.h"
 

@@ -1,4 +1,4 @@
-#include "multiframe.h"
+#include "gi/multiframe.h"
 
 #include <algorithm>
 #include <atomic>
@@ -7,9 +7,9 @@
 #include <sstream>
 #include <utility>
 
-#include "march.h"
+#include "gi/march.h"
+#include "gi/surface_model.h"
 #include "parallel.h"
-#include "surface_model.h"
 
 namespace ssgi::detail {
 namespace {

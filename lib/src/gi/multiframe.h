@@ -22,9 +22,9 @@
 #include <string>
 #include <vector>
 
-#include "directions.h"
-#include "gather.h"
-#include "misses.h"
+#include "gi/directions.h"
+#include "gi/gather.h"
+#include "gi/misses.h"
 #include "ssgi/camera.h"
 #include "ssgi/image.h"
 #include "ssgi/settings.h"

@@ -1,10 +1,10 @@
 // The slice tracer's kernel, compiled once per SIMD target (Highway's foreach_target).
-#include "slice_kernel.h"
+#include "gi/slice_kernel.h"
 
-#include "denoise_kernels.h"  // simd_forced_scalar
+#include "gi/denoise_kernels.h"  // simd_forced_scalar
 
 #undef HWY_TARGET_INCLUDE
-#define HWY_TARGET_INCLUDE "slice_kernel.cpp"
+#define HWY_TARGET_INCLUDE "gi/slice_kernel.cpp"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
 #include <hwy/highway.h>
 

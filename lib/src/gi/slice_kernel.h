@@ -10,7 +10,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "surface_model.h"
+#include "gi/surface_model.h"
 
 namespace ssgi::detail {
 

@@ -1,4 +1,4 @@
-#include "slices.h"
+#include "gi/slices.h"
 
 #include <algorithm>
 #include <array>
@@ -7,11 +7,11 @@
 #include <limits>
 #include <vector>
 
-#include "directions.h"
-#include "march.h"
+#include "gi/directions.h"
+#include "gi/march.h"
+#include "gi/slice_kernel.h"
+#include "gi/surface_model.h"
 #include "parallel.h"
-#include "slice_kernel.h"
-#include "surface_model.h"
 
 namespace ssgi::detail {
 namespace {

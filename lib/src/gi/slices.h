@@ -16,9 +16,9 @@
 // this is the march's and the reference's answer on the same surface model.
 #pragma once
 
-#include "gather.h"
-#include "misses.h"
-#include "multiframe.h"
+#include "gi/gather.h"
+#include "gi/misses.h"
+#include "gi/multiframe.h"
 #include "ssgi/gbuffer.h"
 #include "ssgi/settings.h"
 

@@ -1,4 +1,4 @@
-#include "surface_model.h"
+#include "gi/surface_model.h"
 
 #include <algorithm>
 #include <cmath>

@@ -4,7 +4,7 @@
 // it moves (chained through the frames in between). Each bilinear tap of the other frame must
 // pass a disocclusion test; what survives is clipped to the current frame's neighbourhood
 // (variance clipping, Salvi 2016) before the window averages or the EMA blends it.
-#include "temporal.h"
+#include "gi/temporal.h"
 
 #include <algorithm>
 #include <cmath>
@@ -544,6 +544,86 @@ int ema_preroll_frames(float alpha, double relative_bound) {
   // A tiny alpha asks for more frames than any shot has: cap before the conversion.
   const double frames = std::ceil(std::log(relative_bound) / std::log1p(-double{alpha}));
   return static_cast<int>(std::min(frames, 1e9));
+}
+
+std::vector<Image> level_window_misses(const std::vector<const TracedLight*>& window,
+                                       std::vector<MissColours>* changes) {
+  // A frame's misses take the mean colours of the window's frames lit as it is (the surfaces
+  // both show reflecting the same light to kSameLight, either way), over those with misses in
+  // each group: the view decides which surroundings a border shows, and the frames lit alike
+  // agree on them; a frame lit otherwise (a flash, a lamp switched on) keeps its own colours
+  // and lends them to no other.
+  constexpr double kSameLight = 1.25;
+  const std::size_t n = window.size();
+  const auto levels = [](const TracedLight& t) {
+    return !t.miss_shares.empty() && t.reflected.channels() == 3;
+  };
+  std::vector<char> alike(n * n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    alike[i * n + i] = 1;
+    for (std::size_t j = i + 1; j < n; ++j) {
+      if (!levels(*window[i]) || !levels(*window[j])) continue;
+      const double ratio = shared_light_ratio(window[i]->grid, window[i]->reflected,
+                                              window[j]->grid, window[j]->reflected);
+      alike[i * n + j] = alike[j * n + i] = ratio <= kSameLight && ratio * kSameLight >= 1.0;
+    }
+  }
+  std::vector<Image> out;
+  if (changes) changes->assign(n, MissColours{});
+  for (std::size_t i = 0; i < n; ++i) {
+    const TracedLight* t = window[i];
+    Image light = t->light;
+    MissColours delta{};
+    bool any = false;
+    if (levels(*t))
+      for (int g = 0; g < 3; ++g) {
+        if (!(t->miss_weight[g] > 0)) continue;
+        double sum[3] = {};
+        int count = 0;
+        for (std::size_t j = 0; j < n; ++j) {
+          if (!alike[i * n + j] || !(window[j]->miss_weight[g] > 0)) continue;
+          for (int c = 0; c < 3; ++c) sum[c] += window[j]->miss_colours[g][c];
+          ++count;
+        }
+        for (int c = 0; c < 3; ++c)
+          delta[g][c] = static_cast<float>(sum[c] / count - t->miss_colours[g][c]);
+        any = any || count > 1;
+      }
+    if (changes && any) (*changes)[i] = delta;
+    if (any)
+      parallel_for_rows(light.height(), [&](int y) {
+        const std::size_t row = static_cast<std::size_t>(y) * light.width();
+        for (int x = 0; x < light.width(); ++x) {
+          const std::size_t s = row + x;
+          for (int c = 0; c < 3; ++c) {
+            float d = 0;
+            for (int g = 0; g < 3; ++g) d += t->miss_shares.plane(g)[s] * delta[g][c];
+            light.plane(c)[s] = std::max(light.plane(c)[s] + d, 0.0f);
+          }
+        }
+      });
+    out.push_back(std::move(light));
+  }
+  return out;
+}
+
+void add_continued_light(const TracedLight& own, const Image& continued,
+                         const Image& continued_shares, const MissColours& change,
+                         Image* filtered) {
+  const Image& shares = own.miss_shares;
+  const bool relevel = shares.channels() == 3 && continued_shares.channels() == 3 &&
+                       continued_shares.plane_size() == filtered->plane_size();
+  for (int c = 0; c < 3; ++c) {
+    float* out = filtered->plane(c);
+    const float *with = continued.plane(c), *without = own.light.plane(c);
+    for (std::size_t i = 0; i < filtered->plane_size(); ++i) {
+      float found = 0;
+      if (relevel)
+        for (int g = 0; g < 3; ++g)
+          found += (shares.plane(g)[i] - continued_shares.plane(g)[i]) * change[g][c];
+      out[i] = std::max(out[i] + (with[i] - without[i]) - found, 0.0f);
+    }
+  }
 }
 
 }  // namespace ssgi::detail

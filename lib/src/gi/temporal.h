@@ -2,12 +2,59 @@
 // variance clipping (Salvi 2016), the seed's exponential moving average and the symmetric window.
 #pragma once
 
+#include <array>
+#include <memory>
 #include <vector>
 
 #include "ssgi/gbuffer.h"
 #include "ssgi/image.h"
 
 namespace ssgi::detail {
+
+struct FrameTrace;
+
+// RGB per group of the miss model's cube faces: sideways, up, down.
+using MissColours = std::array<std::array<float, 3>, 3>;
+
+// One frame's light as traced (misses and bounces included) and denoised, at the trace grid's
+// resolution, with the grid's geometry as a G-buffer in grid units (depth, normals, motion and
+// camera; windows from (0, 0)): what the temporal stage filters.
+struct TracedLight {
+  GBuffer grid;
+  Image light;     // 3 channels, the grid's size
+  Image coverage;  // 1 channel, the grid's size: FrameResult::coverage there (-1: no surface)
+  // With Plan::multiframe, what continuing its rays and being continued in needs.
+  std::shared_ptr<FrameTrace> trace;
+  // The window's: the colours the miss model's cube (gi/misses.h) gave the last bounce's misses
+  // heading sideways, up and down (RGB each; the sides' four faces weighted by their shares over
+  // the frame), and each trace sample's shares of those three, denoised as the light is (3
+  // channels; empty when the plan has no window).
+  MissColours miss_colours{};
+  std::array<float, 3> miss_weight{};  // each group's share of the frame's misses (0: none)
+  Image miss_shares;
+  Image reflected;  // 3 channels, the grid's size: the light its surfaces reflect
+};
+
+// The window's lights (TracedLight::light of each of `window`) with the miss model's colours of
+// the last bounce levelled over the window: each frame's light plus its shares x (the levelled
+// colours - its own), a group's levelled colour being the mean of its colours over the window's
+// frames lit alike (those with misses in that group). A frame's border shows other surroundings
+// as the view moves; the window's frames together show more, and agree. Two frames are lit
+// alike when the surfaces both show reflect the same light, to 1.25x (shared_light_ratio): a
+// lamp entering the view changes what a frame shows, a flash changes the light of what both
+// show; frames that share no surface are not. Frames without shares are as they are. With
+// `changes`, each frame's levelled colours minus its own (0 where it was left as it is): what
+// its light moved by per unit of its shares.
+std::vector<Image> level_window_misses(const std::vector<const TracedLight*>& window,
+                                       std::vector<MissColours>* changes = nullptr);
+
+// Adds to `filtered` (the window's result for `own`) what continuing own's missed rays in other
+// frames changed in its light: `continued` - own.light, less the levelling the rays that found
+// surfaces had had as misses (own.miss_shares - `continued_shares`, times `change`, its
+// levelled colours minus its own); never below 0. The window filters each frame's own light,
+// so that the continuation is added after.
+void add_continued_light(const TracedLight& own, const Image& continued,
+                         const Image& continued_shares, const MissColours& change, Image* filtered);
 
 // Carries `history` (3 channels over frames[to]'s data window) into frames[from]: for each
 // surface pixel of frames[from], the bilinear lookup of `history` where the same surface point

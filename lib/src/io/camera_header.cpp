@@ -1,6 +1,6 @@
 // Cameras from EXR header attributes (OpenEXR standard, Nuke, V-Ray, Arnold) and from JSON
 // sidecar files.
-#include "camera_header.h"
+#include "io/camera_header.h"
 
 #include <cmath>
 #include <cstdint>

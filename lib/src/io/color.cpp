@@ -109,12 +109,6 @@ struct ColorManagement::Impl {
   }
 };
 
-std::string color_config_path(const ColorSettings& settings) {
-  if (!settings.config.empty()) return settings.config;
-  const char* env = std::getenv("OCIO");
-  return env ? env : "";
-}
-
 ColorManagement::ColorManagement() : impl_(std::make_shared<Impl>()) {
   auto impl = std::const_pointer_cast<Impl>(impl_);
   impl->reasons.push_back(

@@ -12,9 +12,9 @@
 #include <memory>
 #include <regex>
 
-#include "camera_header.h"
-#include "input_frame.h"
-#include "oiio_files.h"
+#include "io/camera_header.h"
+#include "io/input_frame.h"
+#include "io/oiio_files.h"
 #include "parallel.h"
 #include "ssgi/color.h"
 #include "ssgi/error.h"

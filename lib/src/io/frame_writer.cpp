@@ -11,8 +11,8 @@
 #include <memory>
 #include <set>
 
-#include "input_frame.h"
-#include "oiio_files.h"
+#include "io/input_frame.h"
+#include "io/oiio_files.h"
 #include "ssgi/error.h"
 #include "ssgi/io.h"
 #include "ssgi/log.h"

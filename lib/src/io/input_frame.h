@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "oiio_files.h"
+#include "io/oiio_files.h"
 #include "ssgi/color.h"
 #include "ssgi/gbuffer.h"
 #include "ssgi/io.h"

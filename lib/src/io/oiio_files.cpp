@@ -1,4 +1,4 @@
-#include "oiio_files.h"
+#include "io/oiio_files.h"
 
 #include <unistd.h>
 

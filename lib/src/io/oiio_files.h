@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "io/temporary_files.h"
 #include "ssgi/image.h"
-#include "ssgi/temporary_files.h"
 
 namespace ssgi::detail {
 

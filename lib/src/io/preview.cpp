@@ -1,5 +1,5 @@
 // Writing the display-referred preview of a frame's composite.
-#include "preview.h"
+#include "io/preview.h"
 
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/strutil.h>
@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <filesystem>
 
-#include "oiio_files.h"
+#include "io/oiio_files.h"
 #include "ssgi/error.h"
 
 namespace ssgi::detail {

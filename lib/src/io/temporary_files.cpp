@@ -1,4 +1,4 @@
-#include "ssgi/temporary_files.h"
+#include "io/temporary_files.h"
 
 #include <fcntl.h>
 #include <sys/syscall.h>

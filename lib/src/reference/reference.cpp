@@ -1,4 +1,4 @@
-#include "reference.h"
+#include "reference/reference.h"
 
 #include <embree3/rtcore.h>
 
@@ -12,10 +12,10 @@
 #include <string>
 #include <vector>
 
-#include "directions.h"
+#include "gi/directions.h"
+#include "gi/surface_model.h"
 #include "parallel.h"
 #include "ssgi/error.h"
-#include "surface_model.h"
 
 namespace ssgi::detail {
 namespace {

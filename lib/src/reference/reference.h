@@ -19,9 +19,9 @@
 #include <cstddef>
 #include <memory>
 
-#include "environment.h"
-#include "gather.h"
-#include "march.h"
+#include "gi/environment.h"
+#include "gi/gather.h"
+#include "gi/march.h"
 #include "ssgi/gbuffer.h"
 #include "ssgi/settings.h"
 

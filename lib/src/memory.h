@@ -8,7 +8,7 @@
 #include <string>
 
 #include "ssgi/io.h"
-#include "ssgi/pipeline.h"
+#include "ssgi/plan.h"
 #include "ssgi/settings.h"
 
 namespace ssgi {
@@ -20,12 +20,6 @@ std::uint64_t parse_memory_size(const std::string& text);
 
 // Bytes for people: "512 MiB", "1.5 GiB".
 std::string memory_size_text(std::uint64_t bytes);
-
-// A memory limit and what set it; bytes 0: none.
-struct MemoryLimit {
-  std::uint64_t bytes = 0;
-  std::string source;  // "--max-memory", "SLURM_MEM_PER_NODE", "cgroup v2 memory.max (path)"
-};
 
 // Where the scheduler's limits are looked for; tests point them at files of their own.
 struct MemoryLimitSources {

@@ -1,0 +1,227 @@
+// One frame's stages: tracing with its misses and bounces, denoising on the trace grid, rays
+// continued in other frames, the light carried to the frame's resolution, the composite.
+#include "frame_stages.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "gi/composite.h"
+#include "gi/denoise.h"
+#include "gi/gather.h"
+#include "gi/march.h"
+#include "gi/multiframe.h"
+#include "gi/slices.h"
+#include "parallel.h"
+#include "reference/reference.h"
+#include "ssgi/error.h"
+#include "ssgi/log.h"
+
+namespace ssgi::detail {
+
+FrameStages::FrameStages(const SequenceInfo& seq, const GiSettings& settings,
+                         const PipelineMemory& memory)
+    : settings_(settings), plan_(make_plan(seq, settings)), memory_(memory) {
+  color_ = color_management_for(settings.color, seq);
+  for (const std::string& reason : color_.reasons()) plan_.reasons.push_back(reason);
+  env_ = settings.env_map.empty()
+             ? Environment(settings.env_color)
+             : Environment::from_file(settings.env_map, settings.env_up, color_);
+}
+
+namespace {
+
+// The trace grid as a G-buffer in grid units, for the temporal stage: its mesh's depth and
+// normals, the motion of its traced pixels (in grid pixels), the camera scaled to the grid.
+GBuffer grid_gbuffer(const GBuffer& g, const TraceGrid& grid) {
+  GBuffer out;
+  out.path = g.path;
+  out.frame = g.frame;
+  out.display_window = out.data_window = {0, 0, grid.width, grid.height};
+  out.camera = g.camera;
+  out.camera.fx = grid.fx;
+  out.camera.fy = grid.fy;
+  out.camera.cx = grid.cx;
+  out.camera.cy = grid.cy;
+  out.depth = grid.depth;
+  out.normal = grid.normal;
+  const float inv_scale = 1.0f / static_cast<float>(grid.scale);
+  auto motion = [&](const Image& full) {
+    if (full.channels() < 2) return Image();
+    Image m(grid.width, grid.height, 2);
+    for (std::size_t s = 0; s < grid.origin.size(); ++s) {
+      const std::int32_t p = grid.origin[s];
+      if (p < 0) continue;
+      for (int c = 0; c < 2; ++c) m.plane(c)[s] = full.plane(c)[p] * inv_scale;
+    }
+    return m;
+  };
+  out.motion_prev = motion(g.motion_prev);
+  out.motion_next = motion(g.motion_next);
+  return out;
+}
+
+// The miss model's cube faces in three groups: the sides (right, left, forward, back), up and
+// down (TracedLight::miss_colours).
+constexpr int kFaceGroup[kCubeFaces] = {0, 0, 1, 2, 0, 0};
+
+// A tracer's cube shares (6 planes) summed by group, one plane each, so that one pass of the
+// denoiser carries them.
+Image grouped_shares(const Image& shares) {
+  Image grouped(shares.width(), shares.height(), 3);
+  for (int f = 0; f < kCubeFaces; ++f) {
+    const float* in = shares.plane(f);
+    float* to = grouped.plane(kFaceGroup[f]);
+    for (std::size_t p = 0; p < shares.plane_size(); ++p) to[p] += in[p];
+  }
+  return grouped;
+}
+
+// The denoiser's pyramid level of a trace scale (1 -> 0, 2 -> 1, 4 -> 2, 8 -> 3).
+int pyramid_level(int scale) {
+  int level = 0;
+  for (int k = scale; k > 1; k /= 2) ++level;
+  return level;
+}
+
+}  // namespace
+
+Image FrameStages::trace(const GBuffer& g, GBuffer* grid_out, Image* coverage,
+                         std::shared_ptr<FrameTrace>* keep, CubeLight* cube, Image* shares,
+                         Image* reflected_out) const {
+  const GiSettings& s = settings_;
+  const Image reflected = reflected_radiance(g, plan_.gather_emission);
+  TraceGrid grid =
+      make_trace_grid(g, reflected, plan_.trace_scale, static_cast<float>(s.thickness));
+  const MissModel misses(g, s.miss, env_);
+  if (reflected_out) *reflected_out = grid.reflected;
+  log_info("frame " + std::to_string(g.frame) + ": " + misses.describe());
+  if (grid_out) *grid_out = grid_gbuffer(g, grid);
+  switch (s.tracer) {
+    case Tracer::kReference: {
+      const ReferenceHits hits(g, s, misses, memory_.reference_hits_bytes);
+      Image light = gather_bounces(grid, hits, s.bounces, misses, coverage, cube);
+      if (shares) *shares = hits.cube();
+      return light;
+    }
+    case Tracer::kScreenSpace: {
+      // The march's rays are freed before the bounces.
+      WeightedHits hits =
+          weighted_from_rays(grid, march_screen_space(g, s, misses));
+      Image light = gather_bounces(grid, hits, s.bounces, misses, coverage, cube);
+      if (shares) *shares = std::move(hits.cube);
+      return light;
+    }
+    case Tracer::kSlices:
+      break;
+  }
+  MissedRays missed;
+  WeightedHits hits = trace_slices(g, grid, s, misses, keep ? &missed : nullptr);
+  Image light = gather_bounces(grid, hits, s.bounces, misses, coverage, cube);
+  if (shares) *shares = hits.cube;
+  if (!keep) return light;
+  *keep = std::make_shared<FrameTrace>(g.frame, g.camera, std::move(grid), std::move(hits),
+                                               misses, std::move(missed));
+  return light;
+}
+
+Image FrameStages::denoise_on_grid(const GBuffer& g, Image light) const {
+  if (!plan_.denoise) return light;
+  const int level = pyramid_level(plan_.trace_scale);
+  return upsample_and_denoise(light, level, g.depth, g.normal, settings_.denoise_settings,
+                                      true, level);
+}
+
+TracedLight FrameStages::trace_light(const GBuffer& g) const {
+  TracedLight out;
+  // The window levels the misses' colours over its frames (window_lights).
+  const bool window = plan_.temporal == TemporalMode::kWindow;
+  CubeLight cube{};
+  Image shares;
+  out.light = trace(
+      g, &out.grid, &out.coverage, plan_.multiframe > 0 ? &out.trace : nullptr,
+      window ? &cube : nullptr, window ? &shares : nullptr, window ? &out.reflected : nullptr);
+  out.light = denoise_on_grid(g, std::move(out.light));
+  if (shares.channels() != kCubeFaces) return out;
+  double face_total[kCubeFaces] = {};
+  for (int f = 0; f < kCubeFaces; ++f) {
+    const float* in = shares.plane(f);
+    for (std::size_t p = 0; p < shares.plane_size(); ++p) face_total[f] += in[p];
+  }
+  for (int group = 0; group < 3; ++group) {
+    double weight = 0, colour[3] = {};
+    for (int f = 0; f < kCubeFaces; ++f) {
+      if (kFaceGroup[f] != group) continue;
+      weight += face_total[f];
+      for (int c = 0; c < 3; ++c) colour[c] += face_total[f] * cube[f][c];
+    }
+    for (int c = 0; c < 3; ++c)
+      out.miss_colours[group][c] = weight > 0 ? static_cast<float>(colour[c] / weight) : 0.0f;
+    out.miss_weight[group] = static_cast<float>(weight);
+  }
+  // Denoised as the light is (the denoiser's weights do not depend on what it filters), so
+  // that a change of colours moves the denoised light as it would have moved the traced one.
+  out.miss_shares = denoise_on_grid(g, grouped_shares(shares));
+  return out;
+}
+
+Image FrameStages::finish_coverage(const GBuffer& g, const GBuffer& grid,
+                                const Image& grid_coverage) const {
+  return coverage_to_frame(grid_coverage, grid.depth, grid.normal, plan_.trace_scale,
+                                   static_cast<float>(settings_.thickness), g.depth);
+}
+
+Image FrameStages::finish_light(const GBuffer& g, const Image& grid_light) const {
+  const int level = pyramid_level(plan_.trace_scale);
+  if (level == 0) return grid_light;
+  return upsample_and_denoise(grid_light, level, g.depth, g.normal,
+                                      settings_.denoise_settings, false);
+}
+
+Image FrameStages::indirect_light(const GBuffer& g, Image* coverage) const {
+  // Without a temporal stage in between, one pass of the pyramid filters and upsamples (its
+  // guides are built once): finish_light(trace_light(g)) but for the 1e-3 own-value fallback
+  // of pixels no coarse sample resembles, which takes the traced light here, the filtered one
+  // there.
+  const Plan& plan = plan_;
+  const int level = pyramid_level(plan.trace_scale);
+  GBuffer grid;
+  Image light = trace(g, coverage ? &grid : nullptr, coverage);
+  if (coverage) *coverage = finish_coverage(g, grid, *coverage);
+  if (level == 0 && !plan.denoise) return light;
+  return upsample_and_denoise(light, level, g.depth, g.normal,
+                                      settings_.denoise_settings, plan.denoise);
+}
+
+bool FrameStages::continue_light(const GBuffer& g, const std::vector<const TracedLight*>& window,
+                              int center, Image* light, Image* coverage, Image* miss_shares) const {
+  std::vector<const FrameTrace*> frames;
+  std::vector<const Image*> lights;
+  int c = -1;
+  for (int i = 0; i < static_cast<int>(window.size()); ++i) {
+    if (!window[i]->trace) continue;
+    if (i == center) c = static_cast<int>(frames.size());
+    frames.push_back(window[i]->trace.get());
+    lights.push_back(&window[i]->light);
+  }
+  if (c < 0) return false;
+  ContinuationReport report;
+  Image shares;
+  const bool continued = continue_rays(frames, lights, c, settings_, light, coverage,
+                                               miss_shares ? &shares : nullptr, &report);
+  log_info(report.describe(frames[c]->frame));
+  if (!continued) return false;
+  *light = denoise_on_grid(g, std::move(*light));  // as trace_light's
+  if (miss_shares && shares.channels() == kCubeFaces)
+    *miss_shares = denoise_on_grid(g, grouped_shares(shares));
+  return true;
+}
+
+std::string FrameStages::describe_misses(const GBuffer& g) const {
+  return MissModel(g, settings_.miss, env_).describe();
+}
+
+FrameResult FrameStages::composite(const GBuffer& g, Image indirect, Image coverage) const {
+  return composite_frame(g, std::move(indirect), std::move(coverage));
+}
+
+}  // namespace ssgi::detail

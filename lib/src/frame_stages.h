@@ -1,0 +1,82 @@
+// One frame's stages, as the sequence processor drives them around the temporal stage: tracing
+// with its misses and bounces, denoising on the trace grid, rays continued in other frames, the
+// light carried to the frame's resolution, the composite. ssgi::Pipeline is their public face.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "gi/environment.h"
+#include "gi/misses.h"
+#include "gi/temporal.h"
+#include "ssgi/color.h"
+#include "ssgi/gbuffer.h"
+#include "ssgi/io.h"
+#include "ssgi/plan.h"
+#include "ssgi/settings.h"
+
+namespace ssgi::detail {
+
+class FrameStages {
+ public:
+  // Loads what the whole run shares (the colour config and its processors, the environment
+  // map); `memory` bounds what the reference keeps. Throws ssgi::Error.
+  FrameStages(const SequenceInfo& sequence, const GiSettings& settings,
+              const PipelineMemory& memory);
+
+  const Plan& plan() const { return plan_; }
+  const GiSettings& settings() const { return settings_; }
+  // The run's colour spaces: read_gbuffer takes it, and the outputs go through it.
+  const ColorManagement& color() const { return color_; }
+
+  // The frame's light traced and denoised on the trace grid, with what the temporal stage needs
+  // of it (TracedLight).
+  TracedLight trace_light(const GBuffer& frame) const;
+
+  // Plan::multiframe: TracedLight::light and ::coverage of window[center] (frame `frame`) with
+  // its missed rays continued in the other frames of `window` (TracedLight of each, ascending
+  // frame order, within Plan::multiframe frames of the centre). False, and nothing written,
+  // when none could be (gi/multiframe.h); -v reports how many were and found a surface. With
+  // `miss_shares`, the shares of the misses left (as TracedLight::miss_shares: grouped,
+  // denoised as the light is).
+  bool continue_light(const GBuffer& frame, const std::vector<const TracedLight*>& window,
+                      int center, Image* light, Image* coverage,
+                      Image* miss_shares = nullptr) const;
+
+  // Light on the trace grid (temporally filtered or not) carried to the frame's resolution by
+  // the denoiser's bilateral upsampling.
+  Image finish_light(const GBuffer& frame, const Image& grid_light) const;
+
+  // TracedLight::coverage at the frame's resolution (1 channel): smoothed over neighbouring
+  // trace samples on one surface and interpolated between them; `grid` is TracedLight::grid.
+  Image finish_coverage(const GBuffer& frame, const GBuffer& grid,
+                        const Image& grid_coverage) const;
+
+  // Pipeline::indirect_light, Pipeline::describe_misses and Pipeline::composite.
+  Image indirect_light(const GBuffer& frame, Image* coverage = nullptr) const;
+  std::string describe_misses(const GBuffer& frame) const;
+  FrameResult composite(const GBuffer& frame, Image indirect, Image coverage = {}) const;
+
+ private:
+  // Tracing, misses and bounces on the trace grid: the light before the denoiser, and, when
+  // `grid_out` is given, the grid as a G-buffer for the temporal stage, when `coverage` is, the
+  // coverage there (gather_bounces), when `keep` is (multiframe), what continuing rays needs.
+  // With `cube` and `shares`, the last bounce's cube colours and the samples' shares of them,
+  // with `reflected` the light the samples reflect.
+  Image trace(const GBuffer& g, GBuffer* grid_out, Image* coverage,
+              std::shared_ptr<FrameTrace>* keep = nullptr, CubeLight* cube = nullptr,
+              Image* shares = nullptr, Image* reflected = nullptr) const;
+
+  // Traced light on the trace grid denoised there (the pyramid from the grid's level), when
+  // the plan denoises: TracedLight::light.
+  Image denoise_on_grid(const GBuffer& g, Image light) const;
+
+  GiSettings settings_;
+  Plan plan_;
+  ColorManagement color_;
+  Environment env_;
+  PipelineMemory memory_;
+};
+
+}  // namespace ssgi::detail
