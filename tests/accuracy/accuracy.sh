@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
-# The README's accuracy table: runs ssgi on the Cycles sample sequences in ../shared/data and
-# prints, per scene and setting, the relative RMSE (RMSE / mean of the truth over surface
-# pixels, all channels, averaged over frames) of `indirect` against the path-traced DiffInd and
-# of the composite against (DiffDir + DiffInd) x DiffCol + Emit, with the wall time of one
-# `ssgi run` over the six-frame sequence divided by six. Usage: tests/accuracy/accuracy.sh [BUILD_DIR] [-- extra ssgi options]
+# The accuracy table of README.md and tests/accuracy/README.md: runs ssgi on the Cycles sample
+# sequences in ../shared/data and prints, per scene and setting, the relative RMSE (RMSE / mean
+# of the truth over surface pixels, all channels, averaged over frames) of `indirect` against
+# the path-traced DiffInd and of the composite against (DiffDir + DiffInd) x DiffCol + Emit,
+# with the wall time of one `ssgi run` over the six-frame sequence divided by six.
+# Usage: tests/accuracy/accuracy.sh [BUILD_DIR] [-- extra ssgi options]
 set -euo pipefail
 source "$(dirname "$0")/common.sh"
 
@@ -14,7 +15,7 @@ settings=(
   "frame estimate, 8 bounces|--miss frame --temporal none"
   "edge extension, 8 bounces (march)|--miss extend --temporal none --tracer march --max-steps 64"
   "auto, 8 bounces, no temporal|--temporal none"
-  "march (the previous default: 8 rays, 64 steps)|--tracer march --max-steps 64"
+  "march (8 rays, 64 steps)|--tracer march --max-steps 64"
   "preset draft|--preset draft"
   "default (slices 2x28, auto, 8 bounces, window ±2)|"
   "preset final|--preset final"

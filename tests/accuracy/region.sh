@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Region renders (issue 11): a shot cropped to a data window inside the display window (as a
+# Region renders: a shot cropped to a data window inside the display window (as a
 # renderer's region render or a compositor's bounding box writes it) must get the light the
 # full frame gets over the same pixels. Per scene and region (each a quarter of the display
 # window: its centre and its four corner quadrants), the mean of `indirect` over the region in

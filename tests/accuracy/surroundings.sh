@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The miss model against the true surroundings (issue 11): how much of each scene's error is the
+# The miss model against the true surroundings: how much of each scene's error is the
 # miss model's guess at what the frame does not show. For each procedural scene of the training
 # set, renders once into the training cache what surrounds the camera at one frame (scenes.py
 # --panorama: lat-long maps from the camera's position and from the mean position of the
@@ -11,8 +11,9 @@
 # surface a ray leaves would see (parallax: a wall near the camera fills half the camera's map
 # and a small part of what the room's other surfaces see), so those columns say how well the
 # surroundings known from one point would do, not what perfect knowledge would. Prints a
-# markdown table, a row per scene (the oracle ambient, ssgi's relRMSE and level with its miss
-# model, and with each map: truth_error's columns for that frame) and their means. Not run by ctest: needs blender and
+# markdown table, a row per scene (the oracle ambient, ssgi's relRMSE -- RMSE of `indirect`
+# against DiffInd divided by the truth's mean, over surface pixels and all channels -- and level
+# with its miss model, and with each map: truth_error's columns for that frame) and their means. Not run by ctest: needs blender and
 # the training cache (training/render.sh).
 # Usage: tests/accuracy/surroundings.sh [BUILD_DIR] [-- extra ssgi options]
 # Environment: SSGI_SURROUNDINGS_FRAME (default 4), and training.sh's SSGI_TRAINING_SCENES,

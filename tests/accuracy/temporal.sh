@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# The README's temporal table: per Cycles sample scene and --temporal mode, the relative RMSE
-# of `indirect` against DiffInd (as in accuracy.sh) and the temporal stability (mean absolute
+# The temporal table of tests/accuracy/README.md: per Cycles sample scene and --temporal mode,
+# the relative RMSE of `indirect` against DiffInd (RMSE / mean of the truth over surface pixels,
+# all channels, averaged over frames) and the temporal stability (mean absolute
 # frame-to-frame change of `indirect` on static surfaces, relative to its mean; the truth's own
 # change beside it). Usage: tests/accuracy/temporal.sh [BUILD_DIR]
 set -euo pipefail

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Accuracy over every scene (issue 11): the two Cycles sample scenes in ../shared/data and the
+# Accuracy over every scene: the two Cycles sample scenes in ../shared/data and the
 # training set of tests/accuracy/training (rendered with Blender into a cache on first use, see
 # training/render.sh: the first run takes hours). Prints a markdown table, one row per scene,
 # of the relative RMSE of `indirect` against the path-traced DiffInd over surface pixels (RMSE

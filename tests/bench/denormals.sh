@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 14's denormal benchmark: gi_ms (from --stats) of one 1080p frame against the same frame
+# The denormal benchmark of tests/bench/README.md: gi_ms (from --stats) of one 1080p frame against the same frame
 # with its direct light (DiffDir) scaled by 1e-40, so that the light the pipeline carries, direct
 # light times albedo and every bounce of it, is denormal, interleaved round by
 # round; prints the medians and their ratio (the target: at most 1.1). Usage:

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 9's figures: a whole `ssgi run` against the I/O floor, and its peak memory. Per frame,
+# The end-to-end table of tests/bench/README.md: a whole `ssgi run` against the I/O floor, and its peak memory. Per frame,
 # the floor is oiiotool reading the passes ssgi needs and writing ten channels (one process
 # per frame, as a farm task would); against it `ssgi run --no-passthrough` over the shot, and
 # `ssgi run` passing every input channel through. The three run interleaved, round by round,

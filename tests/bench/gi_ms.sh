@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The README's speed table: median gi_ms (from --stats) per preset, thread count and temporal
+# The GI table of tests/bench/README.md: median gi_ms (from --stats) per preset, thread count and temporal
 # mode on a 1080p shot, the configurations interleaved round by round so that a noisy machine
 # weighs on all of them alike. One frame in flight: the GI's own time, not shared with the
 # decoding and encoding of the frames around it (tests/bench/end_to_end.sh times the whole).

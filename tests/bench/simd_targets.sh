@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The README's table of SIMD targets: median gi_ms (from --stats) of the default preset with
+# The table of SIMD targets in tests/bench/README.md: median gi_ms (from --stats) of the default preset with
 # each target `ssgi info` lists (--simd), interleaved round by round so that a noisy machine
 # weighs on all alike, and whether each target's frames are the same bits as the first's
 # (ssgi compare -fail 0 -warn 0: every channel of every pixel). Usage:

@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
-# Makes the README's sweep tables and plots: `ssgi sweep` over each sample scene (every preset
-# and the grid, against the 256-ray reference and Cycles' DiffInd, five rounds of timing),
-# written here as SCENE.csv, SCENE.json and SCENE.png. It builds nothing: run .ci/setup first.
+# Makes the sweep tables and plots of tests/sweep/README.md: `ssgi sweep` over each sample scene
+# (every preset and the grid, against the 256-ray reference and Cycles' DiffInd, five rounds of
+# timing), written here as SCENE.csv, SCENE.json and SCENE.png. relRMSE is the RMSE of
+# `indirect` divided by the mean of what it is measured against (the reference or DiffInd), over
+# surface pixels and all channels, averaged over frames. It builds nothing: run .ci/setup first.
 # Usage: tests/sweep/sample_data.sh [BUILD_DIR] [DATA_DIR]   (relative to the repository root;
 # default: build ../shared/data)
 set -euo pipefail

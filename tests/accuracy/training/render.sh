@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Renders the accuracy training set (scenes.py, issue 11) with Blender into a cache outside the
+# Renders the accuracy training set (scenes.py) with Blender into a cache outside the
 # repository, once: a scene whose frames are all there and readable, with camera attributes in
 # their headers, is skipped. Each scene renders into a temporary folder beside its final one and
 # is moved into place only when complete, so an interrupted run leaves no half scene.

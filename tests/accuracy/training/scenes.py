@@ -1,4 +1,4 @@
-"""The accuracy training set of issue 11: procedural Cycles scenes rendered like ../shared/data.
+"""The accuracy training set: procedural Cycles scenes rendered like ../shared/data.
 
 Usage (Blender 3.4, headless):
   blender -b --factory-startup --python-exit-code 1 -P tests/accuracy/training/scenes.py -- \
@@ -559,8 +559,8 @@ SCENES = {
     "courtyard": (courtyard, "enclosed exterior (walls around, sky above); camera pans"),
     "fence": (fence, "fine geometry (pickets, thin rods, grass) before a wall; camera trucks"),
     "playroom": (playroom, "every orientation, back faces, spinning box, rolling ball; static"),
-    # Held out (session 10): added after the miss model's rules were chosen, to check them on
-    # kinds of shot the set did not have.
+    # Held out: not used to choose the miss model's rules, to check them on kinds of shot the
+    # nine above do not have.
     "corridor": (corridor, "long interior at night, a row of ceiling lights; camera walks"),
     "overhead": (overhead, "sunlit yard seen steeply from above; camera rolls as it moves"),
     "lamplit": (lamplit, "exterior at night, two street lamps, black sky; camera pans"),
@@ -580,8 +580,8 @@ def render_settings(scene, samples, frames):
     scene.cycles.samples = samples
     scene.cycles.use_adaptive_sampling = False  # every pixel gets all its samples
     scene.cycles.use_denoising = False
-    # DiffInd is the diffuse indirect of up to 4 bounces (Blender's default, the issue's
-    # minimum): more bounces add a few per cent of light in the interiors and make a frame cost
+    # DiffInd is the diffuse indirect of up to 4 bounces (Blender's default, and the
+    # fewest the accuracy measurements accept): more bounces add a few per cent of light in the interiors and make a frame cost
     # minutes more on 2 cores. Clamps stay at Blender's defaults (direct 0, indirect 10):
     # nothing in the sample data's headers says its renders changed them.
     scene.cycles.max_bounces = 12
