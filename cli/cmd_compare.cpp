@@ -114,7 +114,7 @@ const CompareOptionRow kOptionRows[] = {
      "frame on disk"},
     {"metric", required_argument, kOptMetric, OptionGroup::kSsgi, "LIST",
      "also ssgi's metrics per layer over surface pixels: rmse, relrmse, relmse, psnr, ssim or "
-     "all (man ssgi)"},
+     "all (man ssgi-compare)"},
     {"depth-channel", required_argument, kOptDepthChannel, OptionGroup::kSsgi, "NAME",
      "for --metric: B's channel whose |value| >= 1e9, inf or NaN is background (default: Z or "
      "*depth.Z)"},
@@ -177,7 +177,7 @@ Every channel by index over the union of the data windows; options take one dash
   }
   text +=
       "\nDefaults as idiff's: -fail 1e-06 -warn 1e-06, percents and relatives 0, hard limits "
-      "inf.\nman ssgi has the rules and the metric definitions.\n";
+      "inf.\nman ssgi-compare has the rules and the metric definitions.\n";
   return text;
 }
 

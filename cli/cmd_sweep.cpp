@@ -29,7 +29,7 @@ namespace {
 namespace fs = std::filesystem;
 using Json = nlohmann::ordered_json;
 
-// The CSV's columns, in order (man/ssgi.1, ssgi sweep).
+// The CSV's columns, in order (man/ssgi-sweep.1).
 const char* const kColumns[] = {"name",          "settings",   "ms_per_frame",
                                 "relrmse_ref",   "psnr_ref",   "ssim_ref",
                                 "relrmse_truth", "psnr_truth", "ssim_truth"};
@@ -374,8 +374,8 @@ int run_sweep(int argc, char** argv) {
                                  : "relRMSE against ssgi reference, " +
                                        std::to_string(o.reference_spp) + " spp (RMSE / mean)";
     text.footnote = o.grid ? "grid runs sS-mM-bB: S slices, M samples per slice side, B bounces "
-                             "(trace grid 480 across); presets: man ssgi, PRESETS"
-                           : "presets: man ssgi, PRESETS";
+                             "(trace grid 480 across); presets: man ssgi-gi, PRESETS"
+                           : "presets: man ssgi-gi, PRESETS";
     write_sweep_plot(points, text, o.plot);
     written += ", " + o.plot;
   }

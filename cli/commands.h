@@ -5,7 +5,7 @@
 
 namespace ssgi_cli {
 
-// Exit codes, as documented in man/ssgi.1 (EXIT STATUS).
+// Exit codes, as documented in man/ssgi.1 (EXIT STATUS) and man/ssgi-compare.1.
 enum ExitCode : int {
   kExitOk = 0,
   kExitSomeFramesFailed = 1,

@@ -39,7 +39,9 @@ void print_usage(std::FILE* out) {
                "       ssgi --help | --version\n\n"
                "subcommands:\n");
   for (const Subcommand& s : kSubcommands) std::fprintf(out, "  %-10s %s\n", s.name, s.summary);
-  std::fprintf(out, "\n'ssgi <subcommand> --help' lists its options; man ssgi has the rest.\n");
+  std::fprintf(out,
+               "\n'ssgi <subcommand> --help' lists its options; man ssgi and man ssgi-<subcommand> "
+               "have the rest.\n");
 }
 
 // SIGINT and SIGTERM: the file being written goes (every finished frame is already whole under

@@ -83,7 +83,7 @@ const std::vector<OptionSpec> kTable = {
      "a region render's whole frames: rays leaving the data window meet what they show", nullptr},
     // gi
     {kPreset, "preset", 0, "P", OptionGroup::kGi, kTracing,
-     "draft, default or final: the tracing settings below (man ssgi, PRESETS); options given "
+     "draft, default or final: the tracing settings below (man ssgi-gi, PRESETS); options given "
      "override it",
      [](const RunOptions&) { return std::string("default"); }},
     {kTracer, "tracer", 0, "T", OptionGroup::kGi, kTracing, "slices or march",
@@ -119,7 +119,7 @@ const std::vector<OptionSpec> kTable = {
      "diffuse bounces within the frame, 1 to 64",
      [](const RunOptions& d) { return std::to_string(d.gi.bounces); }},
     {kMiss, "miss", 0, "MODE", OptionGroup::kGi, kPlanning,
-     "what rays that miss bring: auto, frame, extend or env (man ssgi, MISSES)",
+     "what rays that miss bring: auto, frame, extend or env (man ssgi-gi, MISSES)",
      [](const RunOptions& d) { return std::string(ssgi::miss_mode_name(d.gi.miss)); }},
     {kEnv, "env", 0, "FILE", OptionGroup::kGi, kPlanning,
      "lat-long environment map for rays that miss", nullptr},
@@ -218,7 +218,8 @@ const std::vector<OptionSpec> kTable = {
      "the presets to run, comma-separated",
      [](const RunOptions&) { return Strutil::join(ssgi::preset_names(), ","); }},
     {kGrid, "grid", 0, nullptr, OptionGroup::kGi, kSweepCommand,
-     "also run 12 settings: slices 1, 2, 4 x max-steps 16, 28 x bounces 4, 8 (man ssgi)", nullptr},
+     "also run 12 settings: slices 1, 2, 4 x max-steps 16, 28 x bounces 4, 8 (man ssgi-sweep)",
+     nullptr},
     {kReferenceSpp, "reference-spp", 0, "N", OptionGroup::kGi, kSweepCommand,
      "rays per pixel and bounce of the Embree reference, 1 to 4096",
      [](const RunOptions&) {

@@ -1,7 +1,8 @@
 // The options of ssgi run, info, reference, sweep and preview in one table: name, argument, help,
 // default and which subcommands take each. It drives getopt_long (each subcommand registers only
 // its own options), the --help text (defaults read from the code's own defaults, not written out),
-// the errors for unknown, ambiguous and misplaced options, and man/ssgi.1's check.
+// the errors for unknown, ambiguous and misplaced options, and the man pages' check
+// (tests/man_page_test.sh).
 #pragma once
 
 #include <getopt.h>

@@ -277,7 +277,7 @@ TEST(CameraFromMatricesTest, RejectsNonPerspective) {
   ExpectError([&] { camera_from_matrices(w2c, w2c * moved, display, "moved.exr"); },
               ErrorKind::kInput, "centre of projection");
   // A -1..1 screen matrix under the name worldToNDC (3Delight's header in
-  // johannesvollmer/exrs issue 83: 30 degrees, 2048 x 2048).
+  // johannesvollmer/exrs#83: 30 degrees, 2048 x 2048).
   Mat4d screen;
   screen.m[0][0] = screen.m[1][1] = 3.73205;
   screen.m[2][3] = 1;

@@ -50,7 +50,7 @@ for ((r = 0; r < rounds; ++r)); do
     --no-passthrough
   measure passthrough "$ssgi" run "$prefix.####.exr" --frames "$frames" -o "$out/pass.####.exr" \
     -q
-  # Under a memory limit each waiting frame is decoded again to be finished (man ssgi,
+  # Under a memory limit each waiting frame is decoded again to be finished (man ssgi-run,
   # --max-memory): the limits that make the 1080p shot read twice.
   measure run_limited "$ssgi" run "$prefix.####.exr" --frames "$frames" -o "$out/run.####.exr" \
     -q --no-passthrough --max-memory 640M

@@ -77,7 +77,7 @@ namespace ssgi {
 // The sidecar wins over --fov, which wins over the header.
 struct CameraOptions {
   double hfov_deg = 0;  // --fov: > 0 gives a static camera with this horizontal field of view
-  std::string sidecar;  // --camera FILE.json: per-frame cameras (format in man/ssgi.1)
+  std::string sidecar;  // --camera FILE.json: per-frame cameras (format in man/ssgi-cameras.7)
 };
 
 }  // namespace ssgi

@@ -36,7 +36,7 @@ class Pipeline {
   // coverage at the frame's resolution too (FrameResult::coverage).
   Image indirect_light(const GBuffer& frame, Image* coverage = nullptr) const;
 
-  // What the miss model decides for `frame` (man ssgi-run, MISSES) and the numbers it decides
+  // What the miss model decides for `frame` (man ssgi-gi, MISSES) and the numbers it decides
   // from, in one line: what -v prints per frame.
   std::string describe_misses(const GBuffer& frame) const;
 

@@ -26,7 +26,7 @@ enum class MissMode {
   kExtend,
   // kFrame when the frame's border shows the camera is enclosed (walls, floor and ceiling
   // running alongside the view: an interior), kEnvironment when it does not (a set seen from
-  // outside, sky), with a smooth ramp between. See man/ssgi.1, MISSES.
+  // outside, sky), with a smooth ramp between. See man/ssgi-gi.7, MISSES.
   kAuto,
 };
 
@@ -115,7 +115,7 @@ std::string multiframe_text(int multiframe);
 
 // The presets (--preset): `draft` for look development, `default` (what GiSettings{} holds),
 // `final` for delivery. Sets the tracing settings of `name` on *settings, leaving the others.
-// Throws Error(kUsage) for an unknown name. man/ssgi.1 lists what each sets.
+// Throws Error(kUsage) for an unknown name. man/ssgi-gi.7 lists what each sets.
 void apply_preset(const std::string& name, GiSettings* settings);
 
 // The names of the presets, in order of cost.

@@ -1,5 +1,5 @@
 // What rays that meet nothing bring: the miss model, decided per frame from what the frame
-// shows, and shared by the slice tracer, the march and the Embree reference (man/ssgi.1,
+// shows, and shared by the slice tracer, the march and the Embree reference (man/ssgi-gi.7,
 // MISSES, says the same for users).
 //
 // A ray misses when it leaves the frame, or passes behind everything the frame shows. Beyond

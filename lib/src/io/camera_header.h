@@ -45,8 +45,9 @@ namespace ssgi::detail {
 std::optional<Camera> camera_from_header(const OIIO::ImageSpec& spec, const Box2i& display_window,
                                          const std::string& file);
 
-// The camera of `frame` in the sidecar JSON file `json_path` (format above and in man/ssgi.1).
-// Throws Error(kIO) when unreadable, Error(kInput) when malformed or the frame is absent.
+// The camera of `frame` in the sidecar JSON file `json_path` (format above and in
+// man/ssgi-cameras.7). Throws Error(kIO) when unreadable, Error(kInput) when malformed or the frame
+// is absent.
 Camera camera_from_sidecar(const std::string& json_path, int frame, const Box2i& display_window);
 
 }  // namespace ssgi::detail
