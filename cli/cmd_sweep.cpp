@@ -11,7 +11,6 @@
 #include <string>
 #include <vector>
 
-#include "atomic_file.h"
 #include "commands.h"
 #include "io/temporary_files.h"
 #include "run_options.h"
@@ -352,11 +351,11 @@ int run_sweep(int argc, char** argv) {
   }
   const std::vector<bool> front = pareto_front(points);
 
-  write_text_atomically(o.run.output, csv_table(rows), "table");
+  ssgi::write_text_atomically(o.run.output, csv_table(rows), "table");
   std::string written = o.run.output;
   if (!o.json_file.empty()) {
-    write_text_atomically(o.json_file, json_report(rows, front, context).dump(2) + "\n",
-                          "JSON table");
+    ssgi::write_text_atomically(o.json_file, json_report(rows, front, context).dump(2) + "\n",
+                                "JSON table");
     written += ", " + o.json_file;
   }
   if (!o.plot.empty()) {

@@ -7,7 +7,6 @@
 #include <filesystem>
 #include <system_error>
 
-#include "atomic_file.h"
 #include "io/temporary_files.h"
 #include "ssgi/error.h"
 
@@ -136,7 +135,7 @@ TextExtent Canvas::measure(const std::string& text, int size) const {
 }
 
 void Canvas::write_png(const std::string& path) const {
-  write_atomically(path, "image", [this](const std::string& tmp, std::string* why) {
+  ssgi::write_atomically(path, "image", [this](const std::string& tmp, std::string* why) {
     if (image_.write(tmp, OIIO::TypeDesc::UINT8, "png")) return true;
     *why = image_.geterror();
     return false;

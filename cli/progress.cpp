@@ -14,7 +14,6 @@
 #include <thread>
 #include <vector>
 
-#include "atomic_file.h"
 #include "commands.h"
 #include "io/temporary_files.h"
 #include "simd.h"
@@ -260,7 +259,7 @@ void write_stats(const std::string& path, const CommonOptions& o, const ssgi::Ru
       {"summary", summary},
       {"median", {{"read_ms", median(read)}, {"gi_ms", median(gi)}, {"write_ms", median(write)}}},
       {"frames", frames}};
-  write_text_atomically(path, out.dump(2) + "\n", "statistics");
+  ssgi::write_text_atomically(path, out.dump(2) + "\n", "statistics");
 }
 
 // The run's last line: how many frames were written, reused and failed, and which.

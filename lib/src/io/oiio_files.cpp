@@ -190,10 +190,7 @@ AtomicImageWriter::AtomicImageWriter(const std::string& path, std::vector<OIIO::
                                      std::string what)
     : path_(path), what_(std::move(what)), parts_(std::move(parts)) {
   assert(!parts_.empty());
-  const fs::path target = fs::absolute(path);
-  tmp_ = (target.parent_path() / ("." + target.filename().string() + ".tmp" +
-                                  std::to_string(::getpid()) + target.extension().string()))
-             .string();
+  tmp_ = temporary_path_for(path);
   registered_.emplace(tmp_);  // before the file exists
   out_ = OIIO::ImageOutput::create(tmp_);
   if (!out_) fail(one_line(OIIO::geterror()));
@@ -253,14 +250,7 @@ void AtomicImageWriter::commit() {
   assert(out_ && written_ == parts_.size());
   if (!out_->close()) fail(one_line(out_->geterror()));
   out_.reset();
-  std::error_code ec;
-  fs::rename(tmp_, fs::absolute(path_), ec);
-  if (ec) {
-    const std::string why = ec.message();  // before remove() overwrites ec
-    fs::remove(tmp_, ec);
-    tmp_.clear();
-    throw_io(path_, "cannot move the finished " + what_ + " into place: " + why);
-  }
+  move_into_place(tmp_, path_, what_);
   tmp_.clear();
   registered_.reset();
 }

@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <system_error>
 #include <vector>
 
@@ -104,6 +105,45 @@ TemporaryDirectory::~TemporaryDirectory() {
   std::error_code ec;
   std::filesystem::remove_all(path_, ec);
   if (slot_ >= 0) directory_slots[slot_].state.store(0, std::memory_order_release);
+}
+
+std::string temporary_path_for(const std::string& path) {
+  const std::filesystem::path target = std::filesystem::absolute(path);
+  return (target.parent_path() / ("." + target.filename().string() + ".tmp" +
+                                  std::to_string(::getpid()) + target.extension().string()))
+      .string();
+}
+
+void move_into_place(const std::string& tmp, const std::string& path, const std::string& what) {
+  std::error_code ec;
+  std::filesystem::rename(tmp, std::filesystem::absolute(path), ec);
+  if (!ec) return;
+  const std::string why = ec.message();  // before remove() overwrites ec
+  std::filesystem::remove(tmp, ec);
+  throw_io(path, "cannot move the finished " + what + " into place: " + why);
+}
+
+void write_atomically(const std::string& path, const std::string& what,
+                      const std::function<bool(const std::string& tmp, std::string* why)>& write) {
+  const std::filesystem::path target(path);
+  std::error_code ec;
+  if (target.has_parent_path()) std::filesystem::create_directories(target.parent_path(), ec);
+  const std::string tmp = temporary_path_for(path);
+  const TemporaryFile registered(tmp);  // before the file exists
+  std::string why;
+  if (write(tmp, &why)) return move_into_place(tmp, path, what);
+  std::filesystem::remove(tmp, ec);
+  throw_io(path, "cannot write the " + what + (why.empty() ? "" : ": " + why));
+}
+
+void write_text_atomically(const std::string& path, const std::string& text,
+                           const std::string& what) {
+  write_atomically(path, what, [&text](const std::string& tmp, std::string*) {
+    std::ofstream file(tmp, std::ios::binary);
+    file << text;
+    file.flush();
+    return file.good();
+  });
 }
 
 }  // namespace ssgi

@@ -3,6 +3,7 @@
 // A program that stops on a signal removes the temporary files in flight from its handler.
 #pragma once
 
+#include <functional>
 #include <string>
 
 namespace ssgi {
@@ -44,5 +45,26 @@ class TemporaryDirectory {
   std::string path_;
   int slot_;
 };
+
+// The hidden name `path` is written under: in its directory, with the process id (two
+// processes writing one file do not share it) and the extension kept (it tells OIIO the format).
+std::string temporary_path_for(const std::string& path);
+
+// Renames the finished temporary file `tmp` to `path`. On failure removes `tmp` and throws
+// Error(kIO) naming `path`: "cannot move the finished <what> into place: <why>".
+void move_into_place(const std::string& tmp, const std::string& path, const std::string& what);
+
+// Makes the missing directories of `path`, lets `write` write the temporary file it is given
+// (temporary_path_for; false on failure, with *why saying what went wrong if it knows), and
+// moves that into place. The temporary file is registered for remove_temporary_files() and
+// removed on failure. Throws Error(kIO) naming `path`: "cannot write the <what>[: why]". The
+// frames and difference images go through io/oiio_files.h's AtomicImageWriter, which uses the
+// same two steps.
+void write_atomically(const std::string& path, const std::string& what,
+                      const std::function<bool(const std::string& tmp, std::string* why)>& write);
+
+// `text` as the whole file, atomically.
+void write_text_atomically(const std::string& path, const std::string& text,
+                           const std::string& what);
 
 }  // namespace ssgi
