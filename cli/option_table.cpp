@@ -29,30 +29,6 @@ std::string number(double v) {
   return s.str();
 }
 
-const char* tracer_name(ssgi::Tracer t) {
-  switch (t) {
-    case ssgi::Tracer::kSlices:
-      return "slices";
-    case ssgi::Tracer::kScreenSpace:
-      return "march";
-    case ssgi::Tracer::kReference:
-      return "reference (Embree)";
-  }
-  return "";
-}
-
-std::string temporal_text(const ssgi::GiSettings& gi) {
-  switch (gi.temporal) {
-    case ssgi::TemporalMode::kNone:
-      return "none";
-    case ssgi::TemporalMode::kEma:
-      return "ema:" + number(gi.ema_alpha);
-    case ssgi::TemporalMode::kWindow:
-      return "window:" + std::to_string(gi.temporal_radius);
-  }
-  return "";
-}
-
 using ssgi::RunOptions;
 
 // Each entry's default reads the subcommand's defaults (subcommand_defaults), so that the help
@@ -87,7 +63,9 @@ const std::vector<OptionSpec> kTable = {
      "override it",
      [](const RunOptions&) { return std::string("default"); }},
     {kTracer, "tracer", 0, "T", OptionGroup::kGi, kTracing, "slices or march",
-     [](const RunOptions& d) { return std::string(tracer_name(d.gi.tracer)); }},
+     [](const RunOptions& d) {
+       return std::string(ssgi::enum_name(ssgi::kTracerNames, d.gi.tracer));
+     }},
     {kSlices, "slices", 0, "N", OptionGroup::kGi, kTracing,
      "slices per traced pixel, 32 directions each",
      [](const RunOptions& d) { return std::to_string(d.gi.slices); }},
@@ -138,7 +116,7 @@ const std::vector<OptionSpec> kTable = {
      "rays pick up reflected direct light only", nullptr},
     {kDenoise, "denoise", 0, "MODE", OptionGroup::kGi, kPlanning, "pyramid or none",
      [](const RunOptions& d) {
-       return std::string(d.gi.denoise == ssgi::DenoiseMode::kPyramid ? "pyramid" : "none");
+       return std::string(ssgi::enum_name(ssgi::kDenoiseModeNames, d.gi.denoise));
      }},
     {kDenoiseRadius, "denoise-radius", 0, "N", OptionGroup::kGi, kPlanning,
      "the filter's radius at the pyramid's coarsest level, 0 to 32",
@@ -159,7 +137,7 @@ const std::vector<OptionSpec> kTable = {
      }},
     {kTemporal, "temporal", 0, "MODE", OptionGroup::kGi, kPlanning,
      "window[:K] (frames +-K), ema[:ALPHA] or none",
-     [](const RunOptions& d) { return temporal_text(d.gi); }},
+     [](const RunOptions& d) { return ssgi::temporal_text(d.gi); }},
     {kMultiframe, "multiframe", 0, "MODE", OptionGroup::kGi, kPlanning,
      "on[:K] continues missed rays in the temporal window's frames (K each side at most), or off",
      [](const RunOptions& d) { return ssgi::multiframe_text(d.gi.multiframe); }},

@@ -56,13 +56,14 @@ void parse_temporal(const char* text, ssgi::GiSettings* gi) {
   const auto colon = spec.find(':');
   const std::string mode = spec.substr(0, colon);
   const std::string arg = colon == std::string::npos ? "" : spec.substr(colon + 1);
-  if (mode == "none" && arg.empty()) {
-    gi->temporal = ssgi::TemporalMode::kNone;
-  } else if (mode == "ema") {
-    gi->temporal = ssgi::TemporalMode::kEma;
+  const auto temporal = ssgi::enum_value(ssgi::kTemporalModeNames, mode);
+  if (temporal == ssgi::TemporalMode::kNone && arg.empty()) {
+    gi->temporal = *temporal;
+  } else if (temporal == ssgi::TemporalMode::kEma) {
+    gi->temporal = *temporal;
     if (!arg.empty()) gi->ema_alpha = static_cast<float>(parse_double("temporal", arg.c_str()));
-  } else if (mode == "window") {
-    gi->temporal = ssgi::TemporalMode::kWindow;
+  } else if (temporal == ssgi::TemporalMode::kWindow) {
+    gi->temporal = *temporal;
     if (!arg.empty())
       gi->temporal_radius = static_cast<int>(parse_long("temporal", arg.c_str(), 1, 64));
   } else {
@@ -165,11 +166,10 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
         gi.rays = static_cast<int>(parse_long("rays", a, 1, 4096));
         break;
       case kTracer: {
-        const std::string t = a;
-        if (t == "slices")
-          gi.tracer = ssgi::Tracer::kSlices;
-        else if (t == "march")
-          gi.tracer = ssgi::Tracer::kScreenSpace;
+        const auto tracer = ssgi::enum_value(ssgi::kTracerNames, a);
+        // The Embree reference is `ssgi reference`, not a tracer of run.
+        if (tracer && *tracer != ssgi::Tracer::kReference)
+          gi.tracer = *tracer;
         else
           ssgi::throw_usage("--tracer must be slices or march");
         break;
@@ -197,15 +197,8 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
         gi.bounces = static_cast<int>(parse_long("bounces", a, 1, 64));
         break;
       case kMiss: {
-        const std::string mode = a;
-        if (mode == "frame")
-          gi.miss = ssgi::MissMode::kFrame;
-        else if (mode == "env")
-          gi.miss = ssgi::MissMode::kEnvironment;
-        else if (mode == "extend")
-          gi.miss = ssgi::MissMode::kExtend;
-        else if (mode == "auto")
-          gi.miss = ssgi::MissMode::kAuto;
+        if (const auto mode = ssgi::enum_value(ssgi::kMissModeNames, a))
+          gi.miss = *mode;
         else
           ssgi::throw_usage("--miss must be auto, env, extend or frame");
         break;
@@ -230,11 +223,8 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
         gi.gather_emission = 0;
         break;
       case kDenoise: {
-        const std::string mode = a;
-        if (mode == "none")
-          gi.denoise = ssgi::DenoiseMode::kNone;
-        else if (mode == "pyramid")
-          gi.denoise = ssgi::DenoiseMode::kPyramid;
+        if (const auto mode = ssgi::enum_value(ssgi::kDenoiseModeNames, a))
+          gi.denoise = *mode;
         else
           ssgi::throw_usage("--denoise must be none or pyramid");
         break;

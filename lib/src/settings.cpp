@@ -23,18 +23,6 @@ constexpr PresetRow kPresets[] = {
     {"final", 4, 28, 480, 8, kMultiframeWindow},
 };
 
-const char* tracer_name(Tracer t) {
-  switch (t) {
-    case Tracer::kSlices:
-      return "slices";
-    case Tracer::kScreenSpace:
-      return "march";
-    case Tracer::kReference:
-      return "reference";
-  }
-  return "?";
-}
-
 // The shortest text that reads back as the same value (0.1f is "0.1"), so that two settings
 // that differ never print alike: the output's provenance compares them as text.
 template <typename T>
@@ -52,19 +40,20 @@ std::string multiframe_text(int multiframe) {
   return "on:" + text(multiframe);
 }
 
-const char* miss_mode_name(MissMode mode) {
-  switch (mode) {
-    case MissMode::kEnvironment:
-      return "env";
-    case MissMode::kFrame:
-      return "frame";
-    case MissMode::kExtend:
-      return "extend";
-    case MissMode::kAuto:
-      return "auto";
+std::string temporal_text(const GiSettings& s) {
+  const std::string name = enum_name(kTemporalModeNames, s.temporal);
+  switch (s.temporal) {
+    case TemporalMode::kNone:
+      return name;
+    case TemporalMode::kEma:
+      return name + ":" + text(s.ema_alpha);
+    case TemporalMode::kWindow:
+      return name + ":" + text(s.temporal_radius);
   }
-  return "?";
+  return name;
 }
+
+const char* miss_mode_name(MissMode mode) { return enum_name(kMissModeNames, mode); }
 
 void apply_preset(const std::string& name, GiSettings* s) {
   for (const PresetRow& row : kPresets) {
@@ -91,7 +80,8 @@ const std::vector<std::string>& preset_names() {
 }
 
 std::vector<std::pair<std::string, std::string>> describe_settings(const GiSettings& s) {
-  std::vector<std::pair<std::string, std::string>> out = {{"tracer", tracer_name(s.tracer)}};
+  std::vector<std::pair<std::string, std::string>> out = {
+      {"tracer", enum_name(kTracerNames, s.tracer)}};
   if (s.tracer == Tracer::kSlices) {
     out.emplace_back("slices", text(s.slices));
     out.emplace_back("max-steps", text(s.max_steps));
@@ -113,7 +103,7 @@ std::vector<std::pair<std::string, std::string>> describe_settings(const GiSetti
   out.emplace_back("gather-emission", s.gather_emission < 0    ? "layout"
                                       : s.gather_emission == 0 ? "no"
                                                                : "yes");
-  out.emplace_back("denoise", s.denoise == DenoiseMode::kPyramid ? "pyramid" : "none");
+  out.emplace_back("denoise", enum_name(kDenoiseModeNames, s.denoise));
   if (s.denoise == DenoiseMode::kPyramid) {
     const DenoiseSettings& d = s.denoise_settings;
     out.emplace_back("denoise-radius", text(d.radius));
@@ -122,10 +112,7 @@ std::vector<std::pair<std::string, std::string>> describe_settings(const GiSetti
     out.emplace_back("denoise-normal-power", text(d.normal_power));
     out.emplace_back("denoise-blur", text(d.upsample_blur_radius));
   }
-  out.emplace_back("temporal", s.temporal == TemporalMode::kNone ? std::string("none")
-                               : s.temporal == TemporalMode::kEma
-                                   ? "ema:" + text(s.ema_alpha)
-                                   : "window:" + text(s.temporal_radius));
+  out.emplace_back("temporal", temporal_text(s));
   // Only when on, so that outputs written before the option existed still match.
   if (s.multiframe) out.emplace_back("multiframe", multiframe_text(s.multiframe));
   out.emplace_back("seed", text(s.seed));
