@@ -94,6 +94,9 @@ int run_compare(int argc, char** argv) {
   ssgi::CompareStatus status = ssgi::CompareStatus::kOk;
   std::optional<int> worst_frame;
   double worst_frame_rms = -1.0;
+  // idiff pairs channels by index: say so once when the names differ and --channels could help.
+  bool check_channel_names =
+      args.idiff.channels.empty() && !args.idiff.all_subimages && !args.quiet;
   for (const CompareJob& job : jobs) {
     FrameOutcome outcome{job, std::nullopt, std::nullopt, std::nullopt};
     ssgi::IdiffOptions options = args.idiff;
@@ -109,6 +112,10 @@ int run_compare(int argc, char** argv) {
       outcome.error = e;
     }
     if (text) text->frame(outcome);
+    if (check_channel_names && outcome.idiff) {
+      check_channel_names = false;
+      std::fputs(channel_pairing_note(job.a, job.b).c_str(), stderr);
+    }
     if (outcome.idiff) {
       const ssgi::CompareStatus s = outcome.idiff->status;
       ++counts[static_cast<int>(s)];

@@ -1,5 +1,5 @@
 // The parts of `ssgi compare` (cmd_compare.cpp runs them): its options, the report of its
-// results as idiff's text or as JSON.
+// results as idiff's text or as JSON, and the note on channels paired by index.
 #pragma once
 
 #include <array>
@@ -68,5 +68,11 @@ std::string json_report(const CompareArgs& args, const std::vector<FrameOutcome>
                         const std::vector<int>& metric_frame, const ssgi::SequenceSummary& summary,
                         const std::array<int, 3>& counts, std::optional<int> worst_frame,
                         const char* status);
+
+// When A's and B's first subimages name their channels differently (idiff pairs them by
+// index), two lines for stderr that say which names were paired and, where the channel names'
+// layers can be matched, the --channels argument that pairs them by name. Empty when the names
+// agree or a file cannot be read.
+std::string channel_pairing_note(const std::string& a_path, const std::string& b_path);
 
 }  // namespace ssgi_cli
