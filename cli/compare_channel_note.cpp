@@ -8,6 +8,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "compare_command.h"
@@ -42,16 +43,12 @@ std::optional<FirstSubimage> read_first_subimage(const std::string& path) {
   return s;
 }
 
-// A channel name's layer (the text before its last '.', empty for a root channel such as `R`)
-// and the suffix after it.
-std::string layer_of(const std::string& channel) {
+// A channel name split at its last '.': its layer (empty for a root channel such as `R`) and
+// its suffix.
+std::pair<std::string, std::string> split_channel_name(const std::string& channel) {
   const auto dot = channel.rfind('.');
-  return dot == std::string::npos ? std::string() : channel.substr(0, dot);
-}
-
-std::string suffix_of(const std::string& channel) {
-  const auto dot = channel.rfind('.');
-  return dot == std::string::npos ? channel : channel.substr(dot + 1);
+  if (dot == std::string::npos) return {std::string(), channel};
+  return {channel.substr(0, dot), channel.substr(dot + 1)};
 }
 
 // Suffixes in the order a layer lists them: R, G, B, A, then X, Y, Z, then by name.
@@ -63,9 +60,10 @@ bool suffix_before(const std::string& a, const std::string& b) {
   return rank(a) != rank(b) ? rank(a) < rank(b) : a < b;
 }
 
+// The items with ", " or "," between them.
 std::string join(const std::vector<std::string>& items, const char* separator) {
-  std::string out;
-  for (const std::string& item : items) out += (out.empty() ? "" : separator) + item;
+  std::string out = items.empty() ? "" : items[0];
+  for (std::size_t i = 1; i < items.size(); ++i) out += separator + items[i];
   return out;
 }
 
@@ -75,11 +73,12 @@ using Layers = std::vector<std::pair<std::string, std::vector<std::string>>>;
 Layers layers_of(const std::vector<std::string>& channels) {
   Layers layers;
   for (const std::string& channel : channels) {
-    const std::string layer = layer_of(channel);
+    const std::pair<std::string, std::string> parts = split_channel_name(channel);
+    const std::string& layer = parts.first;
     auto it = std::find_if(layers.begin(), layers.end(),
                            [&](const auto& entry) { return entry.first == layer; });
     if (it == layers.end()) it = layers.insert(layers.end(), {layer, {}});
-    it->second.push_back(suffix_of(channel));
+    it->second.push_back(parts.second);
   }
   for (auto& [layer, suffixes] : layers) std::sort(suffixes.begin(), suffixes.end(), suffix_before);
   return layers;
