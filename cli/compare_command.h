@@ -1,0 +1,78 @@
+// The parts of `ssgi compare` (cmd_compare.cpp runs them): its options, the report of its
+// results as idiff's text or as JSON, and the note on channels paired by index.
+#pragma once
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "ssgi/compare.h"
+#include "ssgi/error.h"
+
+namespace ssgi_cli {
+
+// What the command line asks for.
+struct CompareArgs {
+  std::string a, b;
+  std::string frames;
+  bool verbose = false, quiet = false, json = false;
+  std::vector<ssgi::Metric> metrics;  // empty: idiff's numbers only
+  ssgi::IdiffOptions idiff;
+  ssgi::FileCompareOptions file;  // ssgi's metrics
+};
+
+// Parses `ssgi compare`'s arguments (idiff's options and ssgi's). Returns nullopt after
+// printing --help; throws Error(kUsage) for anything it cannot take.
+std::optional<CompareArgs> parse_compare_args(int argc, char** argv);
+
+// What to compare: one pair of files per frame, or a single pair.
+struct CompareJob {
+  std::optional<int> frame;
+  std::string a, b, diff;
+};
+
+// One frame's outcome: results, or the error that stopped it.
+struct FrameOutcome {
+  CompareJob job;
+  std::optional<ssgi::IdiffFileResult> idiff;
+  std::optional<ssgi::FileCompareResult> metrics;  // with --metric
+  std::optional<ssgi::Error> error;
+};
+
+// The text idiff prints, line for line, then ssgi's metrics (marked "ssgi") before the verdict.
+class TextReport {
+ public:
+  explicit TextReport(const CompareArgs& args) : args_(args) {}
+
+  // Before the files are read, as idiff does.
+  void begin(const CompareJob& job);
+
+  void frame(const FrameOutcome& f);
+
+  // After a sequence: ssgi's metrics' mean and worst, the count per verdict, the verdict.
+  void summary(const std::vector<FrameOutcome>& frames, const ssgi::SequenceSummary& s,
+               const std::array<int, 3>& counts, std::optional<int> worst_frame,
+               ssgi::CompareStatus status);
+
+ private:
+  void subimage(const ssgi::IdiffSubimage& s);
+  void metrics_line(const ssgi::FileCompareResult& r, const ssgi::LayerStats& layer);
+  void verdict(ssgi::CompareStatus status);
+
+  const CompareArgs& args_;
+};
+
+// The results as one JSON document (--json): the options, every frame, the summary.
+std::string json_report(const CompareArgs& args, const std::vector<FrameOutcome>& frames,
+                        const std::vector<int>& metric_frame, const ssgi::SequenceSummary& summary,
+                        const std::array<int, 3>& counts, std::optional<int> worst_frame,
+                        const char* status);
+
+// When A's and B's first subimages name their channels differently (idiff pairs them by
+// index), two lines for stderr that say which names were paired and, where the channel names'
+// layers can be matched, the --channels argument that pairs them by name. Empty when the names
+// agree or a file cannot be read.
+std::string channel_pairing_note(const std::string& a_path, const std::string& b_path);
+
+}  // namespace ssgi_cli
