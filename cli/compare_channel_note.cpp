@@ -3,6 +3,7 @@
 // channels; the note names the pairs and, where it can, the --channels argument that pairs them
 // by name.
 #include <OpenImageIO/imageio.h>
+#include <OpenImageIO/strutil.h>
 
 #include <algorithm>
 #include <map>
@@ -58,13 +59,6 @@ bool suffix_before(const std::string& a, const std::string& b) {
     return std::find(kOrder.begin(), kOrder.end(), s) - kOrder.begin();
   };
   return rank(a) != rank(b) ? rank(a) < rank(b) : a < b;
-}
-
-// The items with ", " or "," between them.
-std::string join(const std::vector<std::string>& items, const char* separator) {
-  std::string out = items.empty() ? "" : items[0];
-  for (std::size_t i = 1; i < items.size(); ++i) out += separator + items[i];
-  return out;
 }
 
 // A file's layers in order of first appearance, each with its suffixes in layer order.
@@ -123,7 +117,7 @@ std::string derive_channels_argument(const std::vector<std::string>& a_names,
     if (mine->second.size() != 1 || theirs.size() != 1) return {};
     for (const std::string& item : pairing_items(layer, theirs[0], suffixes)) items.push_back(item);
   }
-  return join(items, ",");
+  return OIIO::Strutil::join(items, ",");
 }
 
 }  // namespace
@@ -138,7 +132,9 @@ std::string channel_pairing_note(const std::string& a_path, const std::string& b
   if (pairs.empty()) return {};
 
   std::string note = "ssgi: warning: A and B name their channels differently; compared by index: ";
-  note += join({pairs.begin(), pairs.begin() + std::min(pairs.size(), kPairsShown)}, ", ");
+  note += OIIO::Strutil::join(
+      std::vector<std::string>(pairs.begin(), pairs.begin() + std::min(pairs.size(), kPairsShown)),
+      ", ");
   if (pairs.size() > kPairsShown) note += " (" + std::to_string(pairs.size()) + " pairs in all)";
   const std::string argument = derive_channels_argument(a->named, b->named);
   note += "\nssgi: hint: to pair them by name: --channels " +

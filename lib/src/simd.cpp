@@ -1,5 +1,6 @@
 #include "simd.h"
 
+#include <OpenImageIO/strutil.h>
 #include <hwy/targets.h>
 
 #include <algorithm>
@@ -15,15 +16,10 @@
 namespace ssgi {
 namespace {
 
-std::string lower(std::string s) {
-  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
-
 // A Highway target as --simd spells it: "avx2"; Highway's own one-lane target is "hwy_scalar",
 // apart from "scalar", the kernels' scalar twins.
 std::string target_name(std::int64_t target) {
-  const std::string name = lower(hwy::TargetName(target));
+  const std::string name = OIIO::Strutil::lower(hwy::TargetName(target));
   return name == "scalar" ? "hwy_scalar" : name;
 }
 
@@ -41,7 +37,7 @@ std::atomic<bool> g_scalar{false};
 std::once_flag g_from_environment;
 
 void apply(const std::string& name) {
-  const std::string wanted = lower(name);
+  const std::string wanted = OIIO::Strutil::lower(name);
   if (wanted == "auto") {
     hwy::SetSupportedTargetsForTest(0);
     g_scalar = false;

@@ -1,6 +1,7 @@
 // Comparing two image files: channels selected by name across all subimages, read with OIIO,
 // for ssgi's metrics (compare_images()) and for idiff's comparison of chosen channels.
 #include <OpenImageIO/imageio.h>
+#include <OpenImageIO/strutil.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -20,12 +21,6 @@ namespace ssgi {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string join(const std::vector<std::string>& items, const char* separator) {
-  std::string out;
-  for (const std::string& item : items) out += (out.empty() ? "" : separator) + item;
-  return out;
-}
 
 // The text before a channel name's last '.', empty for a root channel such as `R`.
 std::string layer_of(const std::string& channel) {
@@ -235,7 +230,7 @@ std::vector<LayerChannels> select_layers(const std::string& a_path, const FileCh
       auto list = [](const std::vector<std::string>& layers) {
         std::vector<std::string> shown;
         for (const std::string& l : layers) shown.push_back(l.empty() ? "R,G,B" : l);
-        return shown.empty() ? std::string("none") : join(shown, ", ");
+        return shown.empty() ? std::string("none") : OIIO::Strutil::join(shown, ", ");
       };
       throw_input(b_path, "no R,G,B layer in common with " + a_path + " (it has " +
                               list(rgb_layers(b_named)) + "; the other has " +
@@ -279,7 +274,7 @@ std::vector<LayerChannels> select_layers(const std::string& a_path, const FileCh
   for (LayerChannels& layer : layers) {
     layer.rgb = layer.a.size() == 3 && suffix_of(layer.a[0]) == "R" &&
                 suffix_of(layer.a[1]) == "G" && suffix_of(layer.a[2]) == "B";
-    if (layer.name.empty()) layer.name = join(layer.a, ",");
+    if (layer.name.empty()) layer.name = OIIO::Strutil::join(layer.a, ",");
   }
   return layers;
 }

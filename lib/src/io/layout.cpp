@@ -2,6 +2,8 @@
 // --channel overrides.
 #include "ssgi/layout.h"
 
+#include <OpenImageIO/strutil.h>
+
 #include <algorithm>
 #include <cstddef>
 #include <set>
@@ -13,6 +15,8 @@
 
 namespace ssgi {
 namespace {
+
+namespace Strutil = OIIO::Strutil;
 
 constexpr const char* kRoleNames[kRoleCount] = {"depth",    "normal", "albedo",   "direct",
                                                 "emission", "motion", "position", "beauty"};
@@ -402,23 +406,15 @@ std::string known_preset_names() {
   return names;
 }
 
-bool starts_with(const std::string& s, const std::string& prefix) {
-  return s.compare(0, prefix.size(), prefix) == 0;
-}
-
-std::string trim(const std::string& s) {
-  const std::size_t b = s.find_first_not_of(" \t");
-  if (b == std::string::npos) return {};
-  const std::size_t e = s.find_last_not_of(" \t");
-  return s.substr(b, e - b + 1);
-}
+// `s` without the spaces and tabs around it.
+std::string trimmed(const std::string& s) { return std::string(Strutil::strip(s, " \t")); }
 
 std::vector<std::string> split_commas(const std::string& s) {
   std::vector<std::string> parts;
   std::size_t start = 0;
   while (true) {
     const std::size_t comma = s.find(',', start);
-    parts.push_back(trim(s.substr(start, comma - start)));
+    parts.push_back(trimmed(s.substr(start, comma - start)));
     if (comma == std::string::npos) break;
     start = comma + 1;
   }
@@ -489,7 +485,7 @@ bool match_layer(const ChannelIndex& index, Role role, const std::string& layer,
     for (int s = first; s < last; ++s) {
       std::vector<std::string> found;
       for (const std::string& name : index.channels(s))
-        if (starts_with(name, head) && name.find('.', head.size()) == std::string::npos)
+        if (Strutil::starts_with(name, head) && name.find('.', head.size()) == std::string::npos)
           found.push_back(name);
       if (found.size() != 1) continue;
       *out = {{s, found[0]}};
@@ -561,7 +557,7 @@ bool match_list(const ChannelIndex& index, Role role, const std::string& list, M
 bool match_candidate(const ChannelIndex& index, Role role, const std::string& candidate,
                      const std::string& preferred_prefix, Match* m) {
   m->prefix.clear();
-  if (starts_with(candidate, kPartPrefix))
+  if (Strutil::starts_with(candidate, kPartPrefix))
     return match_part(index, role, candidate.substr(std::string(kPartPrefix).size()), m);
   if (candidate.find(',') != std::string::npos) return match_list(index, role, candidate, m);
   if (match_layer(index, role, candidate, -1, &m->channels)) return true;
@@ -615,7 +611,7 @@ std::string signature_evidence(const PresetEntry& entry, const FileChannels& fil
           if (key == sig.text) return "header attribute " + key;
           break;
         case Signature::Kind::kKeyPrefix:
-          if (starts_with(key, sig.text)) return "header attribute " + key;
+          if (Strutil::starts_with(key, sig.text)) return "header attribute " + key;
           break;
         case Signature::Kind::kSoftware:
           if (key == "Software" && value.find(sig.text) != std::string::npos)
@@ -653,7 +649,7 @@ std::vector<Override> parse_overrides(const std::vector<std::string>& texts) {
     Override o;
     o.text = text;
     o.name = text.substr(eq + 1);
-    const std::string role = trim(text.substr(0, eq));
+    const std::string role = trimmed(text.substr(0, eq));
     if (!parse_role(role, &o.role))
       throw_usage("--channel '" + text + "': unknown role '" + role + "' (roles: " + role_list() +
                   ")");
@@ -672,7 +668,7 @@ std::vector<Override> parse_overrides(const std::vector<std::string>& texts) {
         throw_usage("--channel '" + text + "': " + role + " takes " + wanted + " channels, got " +
                     std::to_string(names.size()));
       }
-    } else if (starts_with(o.name, kPartPrefix) &&
+    } else if (Strutil::starts_with(o.name, kPartPrefix) &&
                o.name.size() == std::string(kPartPrefix).size()) {
       throw_usage("--channel '" + text + "': part: needs a part name");
     }
@@ -683,7 +679,7 @@ std::vector<Override> parse_overrides(const std::vector<std::string>& texts) {
 
 // What an override looked for, for the error message.
 std::string override_search(const Override& o) {
-  if (starts_with(o.name, kPartPrefix))
+  if (Strutil::starts_with(o.name, kPartPrefix))
     return "a part named " + o.name.substr(std::string(kPartPrefix).size());
   if (o.name.find(',') != std::string::npos) return "channels " + o.name;
   const std::vector<std::string>& first = component_sets(o.role).front();
@@ -708,8 +704,8 @@ std::string describe_channels(const std::vector<ChannelRef>& refs, const FileCha
   bool common = refs.size() > 1 && dot != std::string::npos;
   const std::string layer = common ? refs.front().name.substr(0, dot + 1) : std::string();
   for (const ChannelRef& c : refs)
-    common =
-        common && starts_with(c.name, layer) && c.name.find('.', layer.size()) == std::string::npos;
+    common = common && Strutil::starts_with(c.name, layer) &&
+             c.name.find('.', layer.size()) == std::string::npos;
   if (common) {
     out += layer + "{";
     for (std::size_t i = 0; i < refs.size(); ++i)
