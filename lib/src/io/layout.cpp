@@ -6,11 +6,14 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <initializer_list>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "io/layout_presets.h"
 #include "ssgi/error.h"
 
 namespace ssgi {
@@ -81,312 +84,72 @@ struct PresetEntry {
   std::vector<Signature> signature;
 };
 
-void set_candidates(LayoutPreset* p, Role role, std::vector<std::string> candidates) {
-  p->candidates[static_cast<int>(role)] = std::move(candidates);
+// A row of the table that says what it does not know is refused: a misspelt key must not go
+// unnoticed as a default.
+void check_keys(const nlohmann::json& object, std::initializer_list<const char*> known,
+                const std::string& where) {
+  for (const auto& [key, value] : object.items())
+    if (std::none_of(known.begin(), known.end(), [&](const char* k) { return key == k; }))
+      throw Error(ErrorKind::kInternal, "", "layout presets: " + where + ": unknown key " + key);
 }
 
-// The preset table. Each entry says where its names and conventions come from; where a
-// convention could not be confirmed from the renderer's own documentation the comment says so,
-// and the value is the most plausible one, to be corrected with --channel or a new preset.
+// The preset table: lib/src/io/layout_presets.json, a row per renderer, compiled in. Defaults
+// are LayoutPreset's for what a row leaves out.
 std::vector<PresetEntry> build_presets() {
+  const nlohmann::json json = nlohmann::json::parse(detail::kLayoutPresetsJson);
   std::vector<PresetEntry> table;
-
-  {
-    // Pass names: short ones (2.8 to 4.x) from RE_PASSNAME_* in Blender's
-    // source/blender/makesdna/DNA_scene_types.h; the long ones ("Diffuse Color", "Emission",
-    // ...) from DNA_scene_enums.h in current Blender main (the first release with them was
-    // not confirmed here). Multilayer EXR channels are <view layer>.<pass>.<component>, any
-    // view layer name, matched by layer suffix. Normal and Position are world space ("Surface
-    // normals in world space", manual); Diffuse Direct excludes the BSDF colour ("BSDF color
-    // is not included in this pass", manual). Depth is planar camera z, background 1e10, and
-    // Vector is XY = previous - current, ZW = current - next in pixels with y up: measured on
-    // the Cycles sample data (/work/shared/data/README.md). Cycles samples emitters as lights.
+  for (const nlohmann::json& row : json.at("presets")) {
     PresetEntry e;
     LayoutPreset& p = e.preset;
-    p.name = "blender";
-    p.renderer = "Blender Cycles / EEVEE (multilayer EXR)";
-    set_candidates(&p, Role::kDepth, {"Depth"});
-    set_candidates(&p, Role::kNormal, {"Normal"});
-    set_candidates(&p, Role::kAlbedo, {"DiffCol", "Diffuse Color"});
-    set_candidates(&p, Role::kDirect, {"DiffDir", "Diffuse Direct"});
-    set_candidates(&p, Role::kEmission, {"Emit", "Emission"});
-    set_candidates(&p, Role::kMotion, {"Vector"});
-    set_candidates(&p, Role::kPosition, {"Position"});
-    set_candidates(&p, Role::kBeauty, {"Combined"});
-    p.depth_kind = DepthKind::kPlanarZ;
-    p.normal_space = NormalSpace::kWorld;
-    p.direct_includes_albedo = false;
-    p.background_depth = 1e9;
-    p.motion.xy_to_previous = true;
-    p.motion.y_up = true;
-    p.motion.zw_current_minus_next = true;
-    p.reference =
-        "https://docs.blender.org/manual/en/latest/render/layers/passes.html; Blender source "
-        "DNA_scene_types.h / DNA_scene_enums.h (RE_PASSNAME_*)";
-    // Blender's EXR writer stamps every multilayer file with this attribute (seen in the sample
-    // data); cycles.<layer>.* render statistics accompany Cycles renders.
-    e.signature = {{Signature::Kind::kKey, "BlenderMultiChannel"},
-                   {Signature::Kind::kKeyPrefix, "cycles."}};
-    table.push_back(std::move(e));
-  }
-
-  {
-    // Built-in AOVs (Arnold User Guide, Output and AOVs > AOVs): Z depth, N "smooth normal
-    // (in world space)", P world position, RGBA beauty; motionvector is a VECTOR2 "screen
-    // space motion vector" (Arnold Developer Guide, AOVs) in pixels over the shutter interval:
-    // its direction and y orientation were not confirmed, taken as current -> next, y down.
-    // diffuse_direct is the LPE C<RD>L and diffuse_albedo C<RD>A (Light Path Expression AOVs):
-    // an LPE measures radiance, so diffuse_direct includes the albedo. Arnold samples emissive
-    // meshes as lights (mesh_light) only when set up so; emission is not gathered by default,
-    // as for the other renderers. Background Z: ai_constants.h defines AI_BIG 1e12 and
-    // AI_INFINITE 1e30; either is beyond the threshold. Whether Z is planar or radial was not
-    // confirmed from the documentation ("depth of the shading points as seen from the
-    // camera"); planar is assumed.
-    PresetEntry e;
-    LayoutPreset& p = e.preset;
-    p.name = "arnold";
-    p.renderer = "Autodesk Arnold";
-    set_candidates(&p, Role::kDepth, {"Z"});
-    set_candidates(&p, Role::kNormal, {"N"});
-    set_candidates(&p, Role::kAlbedo, {"diffuse_albedo", "albedo"});
-    set_candidates(&p, Role::kDirect, {"diffuse_direct"});
-    set_candidates(&p, Role::kEmission, {"emission"});
-    set_candidates(&p, Role::kMotion, {"motionvector"});
-    set_candidates(&p, Role::kPosition, {"P"});
-    set_candidates(&p, Role::kBeauty, {"RGBA", "R,G,B,A", "R,G,B"});
-    p.depth_kind = DepthKind::kPlanarZ;
-    p.normal_space = NormalSpace::kWorld;
-    p.direct_includes_albedo = true;
-    p.background_depth = 1e11;
-    p.motion.xy_to_previous = false;
-    p.reference =
-        "https://help.autodesk.com/view/ARNOL/ENU/"
-        "?guid=arnold_user_guide_ac_output_aovs_ac_aovs_html and "
-        "?guid=arnold_user_guide_ac_output_aovs_ac_expression_aovs_html; ai_constants.h";
-    // Arnold's EXR driver writes arnold/version, arnold/stats/... (read by several EXR tools to
-    // recognise Arnold renders).
-    e.signature = {{Signature::Kind::kKeyPrefix, "arnold/"}};
-    table.push_back(std::move(e));
-  }
-
-  {
-    // Render element names: 3ds Max (VRay*) then Maya defaults; the Maya names were not
-    // confirmed. The Z-depth element is remapped between Depth Black and Depth White (Chaos
-    // docs, "ZDepth"): render it with black 0, white 1, no clamp, no invert for raw distances,
-    // or name a raw depth with --channel. Whether that distance is planar was not confirmed.
-    // VRayRawLighting is direct diffuse lighting without the diffuse filter (VRayLighting has
-    // it); VRayDiffuseFilter is the albedo ("The pure diffuse surface color", V-Ray for Rhino
-    // render element list). VRayNormals are in camera space (assumed to match the library's,
-    // not confirmed); VRayVelocity in pixels towards the next frame (not confirmed).
-    PresetEntry e;
-    LayoutPreset& p = e.preset;
-    p.name = "vray";
-    p.renderer = "Chaos V-Ray";
-    set_candidates(&p, Role::kDepth, {"VRayZDepth", "zDepth", "ZDepth"});
-    set_candidates(&p, Role::kNormal, {"VRayNormals", "normals"});
-    set_candidates(&p, Role::kAlbedo, {"VRayDiffuseFilter", "diffuseFilter"});
-    set_candidates(&p, Role::kDirect, {"VRayRawLighting", "rawLight"});
-    set_candidates(&p, Role::kEmission, {"VRaySelfIllumination", "selfIllum"});
-    set_candidates(&p, Role::kMotion, {"VRayVelocity", "velocity"});
-    set_candidates(&p, Role::kBeauty, {"R,G,B,A", "R,G,B"});
-    p.depth_kind = DepthKind::kPlanarZ;
-    p.normal_space = NormalSpace::kCamera;
-    p.direct_includes_albedo = false;
-    p.background_depth = 1e9;
-    p.motion.xy_to_previous = false;
-    p.reference =
-        "https://docs.chaos.com/pages/viewpage.action?pageId=68944831 (ZDepth); "
-        "http://help.chaosgroup.com/vray/help/rhino/150R1/render_elements.htm";
-    // V-Ray stores its render info as vrayInfo/... attributes (read by compositing tools to
-    // recognise V-Ray renders; not in Chaos's own documentation as searched).
-    e.signature = {{Signature::Kind::kKeyPrefix, "vrayInfo/"}};
-    table.push_back(std::move(e));
-  }
-
-  {
-    // RenderMan display channels: z (camera-space depth) and Nn (normalised shading normal in
-    // RenderMan's "current" = camera space, x right, y up, +z forward as in the library) as
-    // written for the denoiser (rmanwiki, "Denoising"); directDiffuse, emissive and albedo are
-    // the predefined LPE AOVs (lpe:C<RD>[<L.>O], lpe:C[<L.>O]), so directDiffuse includes the
-    // albedo. The exact EXR channel names of vector AOVs (Nn.x or Nn.X) were not confirmed:
-    // both are accepted. Motion: the denoiser's backward vectors in raster pixels, towards the
-    // previous frame (y orientation not confirmed).
-    PresetEntry e;
-    LayoutPreset& p = e.preset;
-    p.name = "renderman";
-    p.renderer = "Pixar RenderMan";
-    set_candidates(&p, Role::kDepth, {"z", "Z"});
-    set_candidates(&p, Role::kNormal, {"Nn", "normal"});
-    set_candidates(&p, Role::kAlbedo, {"albedo"});
-    set_candidates(&p, Role::kDirect, {"directDiffuse"});
-    set_candidates(&p, Role::kEmission, {"emissive"});
-    set_candidates(&p, Role::kMotion, {"backward"});
-    set_candidates(&p, Role::kPosition, {"P"});
-    set_candidates(&p, Role::kBeauty, {"Ci", "R,G,B,A", "R,G,B"});
-    p.depth_kind = DepthKind::kPlanarZ;
-    p.normal_space = NormalSpace::kCamera;
-    p.direct_includes_albedo = true;
-    p.background_depth = 1e9;
-    p.motion.xy_to_previous = true;
-    p.reference =
-        "https://rmanwiki.pixar.com/display/REN24/Denoising; RenderMan docs, Light Path "
-        "Expressions (predefined LPE AOVs)";
-    // Not confirmed: RenderMan's header attributes were not found in its documentation; the
-    // Software attribute is taken as the mark.
-    e.signature = {{Signature::Kind::kSoftware, "RenderMan"},
-                   {Signature::Kind::kSoftware, "PRMan"}};
-    table.push_back(std::move(e));
-  }
-
-  {
-    // Houdini Karma render vars, written either as layers of one part or one EXR part per
-    // render var holding plain R G B (or one channel). Names from the Karma Standard Render
-    // Vars LOP: C (beauty), directdiffuse (LPE C<RD>L, so it includes the albedo), emission
-    // (CO); diffuse_albedo as in SideFX's LPE examples. The depth and normal var names
-    // (depth/Pz, N) follow the Mantra image planes; their spaces were not confirmed for
-    // Karma: Pz as planar camera z and N in camera space as in Mantra. ray:motionvector is a
-    // "raster-space velocity of hit surface" (Karma Ray Import VOP): towards the next frame,
-    // pixels; y orientation not confirmed.
-    PresetEntry e;
-    LayoutPreset& p = e.preset;
-    p.name = "karma";
-    p.renderer = "SideFX Houdini Karma";
-    set_candidates(&p, Role::kDepth, {"part:depth", "part:Pz", "depth", "Pz"});
-    set_candidates(&p, Role::kNormal, {"part:N", "N"});
-    set_candidates(&p, Role::kAlbedo,
-                   {"part:albedo", "part:diffuse_albedo", "albedo", "diffuse_albedo"});
-    set_candidates(
-        &p, Role::kDirect,
-        {"part:directdiffuse", "part:diffuse_direct", "directdiffuse", "diffuse_direct"});
-    set_candidates(&p, Role::kEmission, {"part:emission", "emission"});
-    set_candidates(&p, Role::kMotion, {"part:motionvector", "motionvector"});
-    set_candidates(&p, Role::kPosition, {"part:P", "P"});
-    set_candidates(&p, Role::kBeauty, {"part:C", "C"});
-    p.depth_kind = DepthKind::kPlanarZ;
-    p.normal_space = NormalSpace::kCamera;
-    p.direct_includes_albedo = true;
-    p.background_depth = 1e9;
-    p.motion.xy_to_previous = false;
-    p.reference =
-        "https://sidefx.com/docs/houdini/nodes/lop/karmastandardrendervars.html; "
-        "https://www.sidefx.com/docs/houdini/nodes/vop/kma_rayimport.html";
-    // Not confirmed by SideFX's documentation: Karma EXRs carry a Software attribute such as
-    // "Karma (xpu) 20.5.684" (seen in third-party EXR tools).
-    e.signature = {{Signature::Kind::kSoftware, "Karma"}, {Signature::Kind::kKeyPrefix, "karma"}};
-    table.push_back(std::move(e));
-  }
-
-  {
-    // Redshift integrated AOVs (Redshift docs, "Integrated AOVs"): "Diffuse Lighting ...
-    // multiplied by the material's diffuse color ... Diffuse Lighting Raw ... returns the
-    // non-multiplied diffuse lighting", so the raw AOV (direct only: GI is its own AOV) with
-    // DiffuseFilter as albedo. EXR layer names DiffuseFilter, DiffuseLightingRaw, Emission as
-    // used by compositing scripts; Z, N (world space by default, not confirmed), P and
-    // MotionVectors (pixels, current -> next: not confirmed, Redshift can also normalise them)
-    // are the default AOV names.
-    PresetEntry e;
-    LayoutPreset& p = e.preset;
-    p.name = "redshift";
-    p.renderer = "Maxon Redshift";
-    set_candidates(&p, Role::kDepth, {"Z"});
-    set_candidates(&p, Role::kNormal, {"N"});
-    set_candidates(&p, Role::kAlbedo, {"DiffuseFilter"});
-    set_candidates(&p, Role::kDirect, {"DiffuseLightingRaw"});
-    set_candidates(&p, Role::kEmission, {"Emission"});
-    set_candidates(&p, Role::kMotion, {"MotionVectors"});
-    set_candidates(&p, Role::kPosition, {"P"});
-    set_candidates(&p, Role::kBeauty, {"R,G,B,A", "R,G,B"});
-    p.depth_kind = DepthKind::kPlanarZ;
-    p.normal_space = NormalSpace::kWorld;
-    p.direct_includes_albedo = false;
-    p.background_depth = 1e9;
-    p.motion.xy_to_previous = false;
-    p.reference = "https://docs.redshift3d.com/display/RSDOCS/Integrated+AOVs";
-    // Not confirmed by Maxon's documentation: a redshift/ attribute prefix, as EXR tools look
-    // for it.
-    e.signature = {{Signature::Kind::kKeyPrefix, "redshift/"}};
-    table.push_back(std::move(e));
-  }
-
-  {
-    // Movie Render Queue multilayer EXR (Unreal docs, "Render Passes"): layers are
-    // FinalImage<post-process material>: FinalImage is the beauty,
-    // FinalImageMovieRenderQueue_WorldDepth holds "the depth written in world units stored in
-    // the red channel" (centimetres: the scene's units; camera translations are in the same
-    // units), FinalImageMovieRenderQueue_MotionVectors is "stored in the 0,1 coordinate space
-    // for X and Y, where 0.5, 0.5 is no motion", normalised to the screen. Their direction and
-    // y orientation were not confirmed (taken as current -> next, y down). Normals and base
-    // colour need user-made post-process materials (named WorldNormal and BaseColor here by
-    // common practice, not by Epic); the deferred renderer has no direct-diffuse pass, so
-    // direct needs --channel. Background depth is the far scene depth, assumed beyond 1e9 cm.
-    PresetEntry e;
-    LayoutPreset& p = e.preset;
-    p.name = "unreal";
-    p.renderer = "Unreal Engine Movie Render Queue";
-    set_candidates(&p, Role::kDepth,
-                   {"FinalImageMovieRenderQueue_WorldDepth", "MovieRenderQueue_WorldDepth",
-                    "FinalImageSceneDepth", "SceneDepth"});
-    set_candidates(&p, Role::kNormal, {"FinalImageWorldNormal", "WorldNormal"});
-    set_candidates(&p, Role::kAlbedo, {"FinalImageBaseColor", "BaseColor"});
-    set_candidates(&p, Role::kMotion,
-                   {"FinalImageMovieRenderQueue_MotionVectors", "MovieRenderQueue_MotionVectors"});
-    set_candidates(&p, Role::kBeauty, {"FinalImage", "R,G,B,A", "R,G,B"});
-    p.depth_kind = DepthKind::kPlanarZ;
-    p.normal_space = NormalSpace::kWorld;
-    p.direct_includes_albedo = false;
-    p.background_depth = 1e9;
-    p.motion.offset = -0.5;
-    p.motion.in_ndc = true;
-    p.motion.xy_to_previous = false;
-    p.reference =
-        "https://dev.epicgames.com/documentation/en-us/unreal-engine/"
-        "cinematic-render-passes-in-unreal-engine";
-    // The EXR carries unreal/camera/FinalImage/focalLength and friends (read by Epic's own
-    // Nuke example on that page).
-    e.signature = {{Signature::Kind::kKeyPrefix, "unreal/"}};
-    table.push_back(std::move(e));
-  }
-
-  {
-    // Nuke ScanlineRender: depth.Z holds 1/Z ("render world space distance with 1/Z",
-    // ScanlineRender2 reference; ScanlineRender writes depth.Z as 1/distance as well: whether
-    // that distance is planar was not confirmed, planar assumed). N and P layers from its
-    // output vectors (world space, not confirmed), backward.u/v the motion to the previous
-    // frame in pixels, y up as in Nuke's image coordinates. ScanlineRender has no albedo,
-    // direct or emission pass: name them with --channel.
-    PresetEntry e;
-    LayoutPreset& p = e.preset;
-    p.name = "nuke";
-    p.renderer = "Foundry Nuke ScanlineRender";
-    set_candidates(&p, Role::kDepth, {"depth"});
-    set_candidates(&p, Role::kNormal, {"N"});
-    set_candidates(&p, Role::kMotion, {"backward"});
-    set_candidates(&p, Role::kPosition, {"P"});
-    set_candidates(&p, Role::kBeauty, {"R,G,B,A", "R,G,B", "rgba"});
-    p.depth_kind = DepthKind::kInverseZ;
-    p.normal_space = NormalSpace::kWorld;
-    p.direct_includes_albedo = false;
-    p.background_depth = 1e9;
-    p.motion.xy_to_previous = true;
-    p.motion.y_up = true;
-    p.reference =
-        "https://learn.foundry.com/nuke/16.0v1/content/reference_guide/3dnew_nodes/"
-        "scanlinerender.html";
-    // Nuke's EXR writer adds nuke/version, nuke/node_hash and nuke/full_layer_names.
-    e.signature = {{Signature::Kind::kKeyPrefix, "nuke/"}};
-    table.push_back(std::move(e));
-  }
-
-  {
-    // Not a renderer: the roles come from --channel. World-space normals because that is what
-    // most renderers write (they need the file's worldToCamera); planar depth, direct without
-    // albedo, motion in pixels towards the previous frame with y down.
-    PresetEntry e;
-    LayoutPreset& p = e.preset;
-    p.name = "custom";
-    p.renderer = "any renderer, channels named with --channel";
-    set_candidates(&p, Role::kBeauty, {"R,G,B,A", "R,G,B"});
-    p.reference = "ssgi(1), --channel";
+    p.name = row.at("name").get<std::string>();
+    check_keys(row,
+               {"name", "renderer", "roles", "depth_kind", "normals", "direct_includes_albedo",
+                "gather_emission", "background_depth", "motion", "reference", "signature", "notes"},
+               p.name);
+    p.renderer = row.at("renderer").get<std::string>();
+    for (const auto& [name, candidates] : row.at("roles").items()) {
+      Role role;
+      if (!parse_role(name, &role))
+        throw Error(ErrorKind::kInternal, "", "layout presets: " + p.name + ": no role " + name);
+      p.candidates[static_cast<int>(role)] = candidates.get<std::vector<std::string>>();
+    }
+    if (row.contains("depth_kind") &&
+        !parse_depth_kind(row["depth_kind"].get<std::string>(), &p.depth_kind))
+      throw Error(ErrorKind::kInternal, "", "layout presets: " + p.name + ": bad depth_kind");
+    if (row.contains("normals")) {
+      const std::string space = row["normals"].get<std::string>();
+      if (space != normal_space_name(NormalSpace::kWorld) &&
+          space != normal_space_name(NormalSpace::kCamera))
+        throw Error(ErrorKind::kInternal, "", "layout presets: " + p.name + ": bad normals");
+      p.normal_space = space == normal_space_name(NormalSpace::kWorld) ? NormalSpace::kWorld
+                                                                       : NormalSpace::kCamera;
+    }
+    p.direct_includes_albedo = row.value("direct_includes_albedo", p.direct_includes_albedo);
+    p.gather_emission = row.value("gather_emission", p.gather_emission);
+    p.background_depth = row.value("background_depth", p.background_depth);
+    if (row.contains("motion")) {
+      const nlohmann::json& m = row["motion"];
+      check_keys(m,
+                 {"offset", "scale", "in_ndc", "xy_to_previous", "y_up", "zw_current_minus_next"},
+                 p.name + " motion");
+      p.motion.offset = m.value("offset", p.motion.offset);
+      p.motion.scale = m.value("scale", p.motion.scale);
+      p.motion.in_ndc = m.value("in_ndc", p.motion.in_ndc);
+      p.motion.xy_to_previous = m.value("xy_to_previous", p.motion.xy_to_previous);
+      p.motion.y_up = m.value("y_up", p.motion.y_up);
+      p.motion.zw_current_minus_next =
+          m.value("zw_current_minus_next", p.motion.zw_current_minus_next);
+    }
+    p.reference = row.at("reference").get<std::string>();
+    for (const nlohmann::json& test : row.value("signature", nlohmann::json::array())) {
+      check_keys(test, {"key", "key_prefix", "software"}, p.name + " signature");
+      if (test.contains("key"))
+        e.signature.push_back({Signature::Kind::kKey, test["key"].get<std::string>()});
+      else if (test.contains("key_prefix"))
+        e.signature.push_back({Signature::Kind::kKeyPrefix, test["key_prefix"].get<std::string>()});
+      else if (test.contains("software"))
+        e.signature.push_back({Signature::Kind::kSoftware, test["software"].get<std::string>()});
+    }
     table.push_back(std::move(e));
   }
   return table;
