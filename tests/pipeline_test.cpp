@@ -526,7 +526,7 @@ TEST(Pipeline, MultiframeFindsALitFaceOnlyANeighbourShows) {
   const Camera& cam = a.camera;
   const int w = a.width(), h = a.height();
   const double r = std::sqrt(0.5);
-  std::vector<Imath::V3d> point(static_cast<std::size_t>(w) * h);  // world space
+  std::vector<Imath::V3d> point(static_cast<std::size_t>(w) * h, Imath::V3d(0));  // world space
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       const double c[3] = {(x + 0.5 - cam.cx) / cam.fx, (cam.cy - (y + 0.5)) / cam.fy, 1.0};

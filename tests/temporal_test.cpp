@@ -39,11 +39,6 @@ std::vector<GBuffer> load_fixture(const std::string& name) {
   return frames;
 }
 
-Imath::V3d add(const Imath::V3d& a, const Imath::V3d& b) {
-  return {a.x + b.x, a.y + b.y, a.z + b.z};
-}
-Imath::V3d scale(const Imath::V3d& a, double s) { return {a.x * s, a.y * s, a.z * s}; }
-
 // A camera sliding sideways (world = camera axes: x right, y up, z forward) over a floor and a
 // wall, with a sphere moving in front of them. Ray cast through pixel centres; motion vectors
 // project each hit point, moved with its object, through the neighbouring frames' cameras.
@@ -55,10 +50,8 @@ struct Shot {
   double sphere_radius = 0.7;
   double wall_z = 8, floor_y = -1;
 
-  Imath::V3d camera_position(int frame) const { return scale(camera_velocity, frame); }
-  Imath::V3d sphere_centre(int frame) const {
-    return add(sphere_start, scale(sphere_velocity, frame));
-  }
+  Imath::V3d camera_position(int frame) const { return camera_velocity * frame; }
+  Imath::V3d sphere_centre(int frame) const { return sphere_start + sphere_velocity * frame; }
   Camera camera(int frame) const {
     Camera c = camera_from_fov(hfov_deg, {0, 0, width, height});
     c.has_world_transform = true;
@@ -111,20 +104,19 @@ GBuffer Shot::render(int frame) const {
         const double t_sphere = (-b - std::sqrt(disc)) / a;
         if (t_sphere > 0 && t_sphere < t) {
           t = t_sphere;
-          const Imath::V3d p = add(eye, scale(d, t));
-          n = scale({p.x - centre.x, p.y - centre.y, p.z - centre.z}, 1 / sphere_radius);
+          const Imath::V3d p = eye + d * t;
+          n = (p - centre) * (1 / sphere_radius);
           velocity = sphere_velocity;
         }
       }
-      const Imath::V3d p = add(eye, scale(d, t));
+      const Imath::V3d p = eye + d * t;
       g.depth.at(0, x, y) = static_cast<float>(t);
       g.normal.at(0, x, y) = static_cast<float>(n.x);
       g.normal.at(1, x, y) = static_cast<float>(n.y);
       g.normal.at(2, x, y) = static_cast<float>(n.z);
       const Imath::V3d prev =
-          project(camera(frame - 1), camera_position(frame - 1), add(p, scale(velocity, -1)));
-      const Imath::V3d next =
-          project(camera(frame + 1), camera_position(frame + 1), add(p, velocity));
+          project(camera(frame - 1), camera_position(frame - 1), p + velocity * -1.0);
+      const Imath::V3d next = project(camera(frame + 1), camera_position(frame + 1), p + velocity);
       g.motion_prev.at(0, x, y) = static_cast<float>(prev.x - px);
       g.motion_prev.at(1, x, y) = static_cast<float>(prev.y - py);
       g.motion_next.at(0, x, y) = static_cast<float>(next.x - px);

@@ -57,8 +57,7 @@ Imath::V3f cosine_hemisphere(const Imath::V3f& n, float u1, float u2) {
   const float b = n.x * n.y * a;
   const Imath::V3f t{1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x};
   const Imath::V3f bt{b, sign + n.y * n.y * a, -n.y};
-  return {lx * t.x + ly * bt.x + lz * n.x, lx * t.y + ly * bt.y + lz * n.y,
-          lx * t.z + ly * bt.z + lz * n.z};
+  return lx * t + ly * bt + lz * n;
 }
 
 }  // namespace ssgi::detail

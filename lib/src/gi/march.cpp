@@ -217,7 +217,7 @@ struct Tracer {
         settings.max_distance > 0 ? static_cast<float>(settings.max_distance) : kFarFactor * o.z;
     if (d.z < 0) t_end = std::min(t_end, (o.z - kNearFraction * o.z) / -d.z);
     if (!(t_end > 0)) return -1;
-    const Imath::V3f e{o.x + t_end * d.x, o.y + t_end * d.y, o.z + t_end * d.z};
+    const Imath::V3f e = o + t_end * d;
     const Camera& cam = g.camera;
     // Screen positions in data-window pixel units.
     const float sx0 = static_cast<float>(cam.cx + cam.fx * o.x / o.z) - offset_x;
@@ -249,7 +249,7 @@ struct Tracer {
     if (!std::isfinite(ze)) return -1;
     const Imath::V3f n{g.normal.at(0, ix, iy), g.normal.at(1, ix, iy), g.normal.at(2, ix, iy)};
     const Imath::V3d pe = g.camera.unproject(ix + offset_x + 0.5, iy + offset_y + 0.5, ze);
-    const float facing = n.x * d.x + n.y * d.y + n.z * d.z;
+    const float facing = n.dot(d);
     if (!(facing < 0)) return -1;
     const float t =
         (n.x * (static_cast<float>(pe.x) - o.x) + n.y * (static_cast<float>(pe.y) - o.y) +

@@ -86,18 +86,16 @@ MissModel::MissModel(const GBuffer& g, MissMode mode, const Environment& env)
       }
     const Imath::V3f& a = world[up];
     const bool flip = std::fabs(a.y) > 1e-3f ? a.y < 0 : a.z > 0;
-    up_ = flip ? Imath::V3f{-a.x, -a.y, -a.z} : a;
+    up_ = flip ? -a : a;
     up_name_ = std::string(flip ? "-" : "+") + "XYZ"[up] + " (world)";
   }
   // The cube's axes: the horizontal right and forward of the view (the view's forward, or
   // looking straight down or up its up, with the up component taken out), and the world's up.
   Imath::V3f forward{-up_.z * up_.x, -up_.z * up_.y, 1.0f - up_.z * up_.z};
-  if (forward.x * forward.x + forward.y * forward.y + forward.z * forward.z < 1e-6f)
+  if (forward.dot(forward) < 1e-6f)
     forward = {-up_.y * up_.x, 1.0f - up_.y * up_.y, -up_.y * up_.z};
   forward = normalized(forward.x, forward.y, forward.z);
-  const Imath::V3f right{up_.y * forward.z - up_.z * forward.y,
-                         up_.z * forward.x - up_.x * forward.z,
-                         up_.x * forward.y - up_.y * forward.x};
+  const Imath::V3f right = up_.cross(forward);
   axis_[0] = right, axis_[1] = up_, axis_[2] = forward;
 
   // Over a lattice of the data window: the sky's share by elevation (the pixels showing no

@@ -14,19 +14,13 @@
 namespace ssgi::detail {
 namespace {
 
-// Camera space of one frame to camera space of another, in floats (p' = R p + t).
+// Camera space of one frame to camera space of another, in floats (row vectors:
+// p' = p R + t).
 struct Rigid {
-  float r[3][3], t[3];
-  Imath::V3f point(const Imath::V3f& p) const {
-    return {r[0][0] * p.x + r[0][1] * p.y + r[0][2] * p.z + t[0],
-            r[1][0] * p.x + r[1][1] * p.y + r[1][2] * p.z + t[1],
-            r[2][0] * p.x + r[2][1] * p.y + r[2][2] * p.z + t[2]};
-  }
-  Imath::V3f direction(const Imath::V3f& d) const {
-    return {r[0][0] * d.x + r[0][1] * d.y + r[0][2] * d.z,
-            r[1][0] * d.x + r[1][1] * d.y + r[1][2] * d.z,
-            r[2][0] * d.x + r[2][1] * d.y + r[2][2] * d.z};
-  }
+  Imath::M33f rotation;
+  Imath::V3f translation{0, 0, 0};
+  Imath::V3f point(const Imath::V3f& p) const { return p * rotation + translation; }
+  Imath::V3f direction(const Imath::V3f& d) const { return d * rotation; }
 };
 
 // From camera `from`'s space to camera `to`'s (row-vector matrices: from's camera-to-world,
@@ -35,8 +29,8 @@ Rigid between(const Camera& from, const Camera& to) {
   const Imath::M44d m = inverse_checked(from.world_to_camera) * to.world_to_camera;
   Rigid out;
   for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) out.r[i][j] = static_cast<float>(m[j][i]);
-    out.t[i] = static_cast<float>(m[3][i]);
+    for (int j = 0; j < 3; ++j) out.rotation[i][j] = static_cast<float>(m[i][j]);
+    out.translation[i] = static_cast<float>(m[3][i]);
   }
   return out;
 }
@@ -130,7 +124,7 @@ float first_hidden(const View& own, const Imath::V3f& o, const Imath::V3f& d, fl
                    float scale, int steps, float jitter) {
   const TraceGrid& g = own.trace->grid;
   const float t1 = std::isinf(t_exit) ? kFarFactor * scale : t_exit;
-  const Imath::V3f b{o.x + t1 * d.x, o.y + t1 * d.y, o.z + t1 * d.z};
+  const Imath::V3f b = o + t1 * d;
   if (!(o.z > 0) || !(b.z > 0)) return t_exit;
   const float h0 = 1.0f / o.z, h1 = 1.0f / b.z;
   const float sx0 = g.cx + g.fx * o.x / o.z, sy0 = g.cy - g.fy * o.y / o.z;
@@ -169,8 +163,8 @@ std::int32_t march_in(const View& n, const Imath::V3f& o, const Imath::V3f& d, f
   }
   if (d.z < 0) t1 = std::min(t1, (o.z - near) / -d.z);
   if (!(t1 > t0)) return -1;
-  const Imath::V3f a{o.x + t0 * d.x, o.y + t0 * d.y, o.z + t0 * d.z};
-  const Imath::V3f b{o.x + t1 * d.x, o.y + t1 * d.y, o.z + t1 * d.z};
+  const Imath::V3f a = o + t0 * d;
+  const Imath::V3f b = o + t1 * d;
   const float sx0 = g.cx + g.fx * a.x / a.z, sy0 = g.cy - g.fy * a.y / a.z;
   const float sx1 = g.cx + g.fx * b.x / b.z, sy1 = g.cy - g.fy * b.y / b.z;
   ScreenSegment seg{sx0, sy0, sx1 - sx0, sy1 - sy0, 1.0f / a.z, 1.0f / b.z, 0.0f, 1.0f};
@@ -322,9 +316,8 @@ bool continue_rays(const std::vector<const FrameTrace*>& frames,
           // not see as empty space.
           const Imath::V3f x = n.view->vertex(h);
           const Imath::V3f dn = n.from_center.direction(ray.direction);
-          const float along = (x.x - on.x) * dn.x + (x.y - on.y) * dn.y + (x.z - on.z) * dn.z;
-          if (seen_past(own, n.to_center.point({on.x + along * dn.x, on.y + along * dn.y,
-                                                on.z + along * dn.z}))) {
+          const float along = (x - on).dot(dn);
+          if (seen_past(own, n.to_center.point(on + along * dn))) {
             refused = true;
             continue;
           }

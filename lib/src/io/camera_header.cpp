@@ -31,13 +31,6 @@ Imath::M44d diagonal(double x, double y, double z) {
   return d;
 }
 
-Imath::M44d transposed(const Imath::M44d& a) {
-  Imath::M44d t;
-  for (int i = 0; i < 4; ++i)
-    for (int j = 0; j < 4; ++j) t[i][j] = a[j][i];
-  return t;
-}
-
 // Exact-case lookup: OIIO keeps EXR attribute names as written, except for a few it renames to
 // its own (lower-case) conventions, and those renamed names mean something else (see below).
 const OIIO::ParamValue* find_exact(const OIIO::ImageSpec& spec, const std::string& name) {
@@ -196,7 +189,7 @@ std::optional<Camera> vray_camera(const OIIO::ImageSpec& spec, const Box2i& disp
     Imath::M44d t = *transform;
     const double last_col = std::abs(t[0][3]) + std::abs(t[1][3]) + std::abs(t[2][3]);
     const double last_row = std::abs(t[3][0]) + std::abs(t[3][1]) + std::abs(t[3][2]);
-    if (last_col > 0 && last_row == 0) t = transposed(t);
+    if (last_col > 0 && last_row == 0) t = t.transposed();
     try {
       world_to_local = inverse_checked(t);
     } catch (const Error& e) {

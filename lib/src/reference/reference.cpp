@@ -22,10 +22,6 @@ namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
-Imath::V3f along(const Imath::V3f& o, const Imath::V3f& d, float t) {
-  return {o.x + t * d.x, o.y + t * d.y, o.z + t * d.z};
-}
-
 // Embree reports errors through a callback; the first message is kept for the exception.
 void keep_first_error(void* user, RTCError, const char* message) {
   auto* first = static_cast<std::string*>(user);
@@ -305,7 +301,7 @@ class ReferenceTracer {
     float t_end = tfar_;
     if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
       const bool enters = rh.hit.Ng_x * d.x + rh.hit.Ng_y * d.y + rh.hit.Ng_z * d.z < 0;
-      if (enters) return light_at(scene_.triangle_of(rh.hit.primID), along(o, d, rh.ray.tfar));
+      if (enters) return light_at(scene_.triangle_of(rh.hit.primID), o + rh.ray.tfar * d);
       t_end = rh.ray.tfar;
     }
     return light_where_counting_starts(o, d, t_end, x, y);
@@ -331,7 +327,7 @@ class ReferenceTracer {
     float t = std::min(t_end, kFarFactor * o.z);
     if (d.z < 0) t = std::min(t, (o.z - kNearFraction * o.z) / -d.z);
     if (!(t > 0)) return -1;
-    const Imath::V3f e = along(o, d, t);
+    const Imath::V3f e = o + t * d;
     float sx0, sy0, sx1, sy1;
     screen_.project(o, &sx0, &sy0);
     screen_.project(e, &sx1, &sy1);
