@@ -193,10 +193,7 @@ double MissModel::border_weight(double x, double y) const {
 
 std::array<float, 3> MissModel::environment(const Imath::V3f& d) const {
   if (env_.is_constant() || !rotate_) return env_.radiance(d);
-  const auto& m = camera_to_world_;  // row vectors: world = d * M
-  return env_.radiance({d.x * m[0][0] + d.y * m[1][0] + d.z * m[2][0],
-                        d.x * m[0][1] + d.y * m[1][1] + d.z * m[2][1],
-                        d.x * m[0][2] + d.y * m[1][2] + d.z * m[2][2]});
+  return env_.radiance(d * camera_to_world_);  // row vectors: world = d * M
 }
 
 CubeLight MissModel::cube_light(const TraceGrid& grid, const std::array<float, 4>* light,
