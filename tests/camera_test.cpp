@@ -38,108 +38,109 @@ void ExpectError(const Call& call, ErrorKind kind, const std::string& needle) {
   }
 }
 
-Mat4d Diagonal(double x, double y, double z) {
-  Mat4d d;
-  d.m[0][0] = x;
-  d.m[1][1] = y;
-  d.m[2][2] = z;
+Imath::M44d Diagonal(double x, double y, double z) {
+  Imath::M44d d;
+  d[0][0] = x;
+  d[1][1] = y;
+  d[2][2] = z;
   return d;
 }
 
-Mat4d Translation(double x, double y, double z) {
-  Mat4d t;
-  t.m[3][0] = x;
-  t.m[3][1] = y;
-  t.m[3][2] = z;
+Imath::M44d Translation(double x, double y, double z) {
+  Imath::M44d t;
+  t[3][0] = x;
+  t[3][1] = y;
+  t[3][2] = z;
   return t;
 }
 
 // Rotation by `deg` about a unit axis, row-vector convention (p' = p * R).
-Mat4d Rotation(Vec3d axis, double deg) {
+Imath::M44d Rotation(Imath::V3d axis, double deg) {
   const double a = deg * kPi / 180, c = std::cos(a), s = std::sin(a), t = 1 - c;
   const double x = axis.x, y = axis.y, z = axis.z;
-  Mat4d r;
+  Imath::M44d r;
   // Column-vector rotation matrix, transposed into row-vector form.
   const double col[3][3] = {{t * x * x + c, t * x * y - s * z, t * x * z + s * y},
                             {t * x * y + s * z, t * y * y + c, t * y * z - s * x},
                             {t * x * z - s * y, t * y * z + s * x, t * z * z + c}};
   for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) r.m[i][j] = col[j][i];
+    for (int j = 0; j < 3; ++j) r[i][j] = col[j][i];
   return r;
 }
 
 // Camera space (x right, y up, +z forward) to NDC for pinhole intrinsics in pixels over a
 // W x H display window: NDC x = (fx x / z + cx) / W, NDC y = (cy - fy y / z) / H, w = z.
-Mat4d CameraToNdc(double fx, double fy, double cx, double cy, int w, int h) {
-  Mat4d p;
-  p.m[0][0] = fx / w;
-  p.m[1][1] = -fy / h;
-  p.m[2][0] = cx / w;
-  p.m[2][1] = cy / h;
-  p.m[2][2] = 1;
-  p.m[2][3] = 1;
-  p.m[3][2] = -0.1;  // NDC z is unused; a near-plane term as renderers write it
-  p.m[3][3] = 0;
+Imath::M44d CameraToNdc(double fx, double fy, double cx, double cy, int w, int h) {
+  Imath::M44d p;
+  p[0][0] = fx / w;
+  p[1][1] = -fy / h;
+  p[2][0] = cx / w;
+  p[2][1] = cy / h;
+  p[2][2] = 1;
+  p[2][3] = 1;
+  p[3][2] = -0.1;  // NDC z is unused; a near-plane term as renderers write it
+  p[3][3] = 0;
   return p;
 }
 
-double MaxAbsDiff(const Mat4d& a, const Mat4d& b) {
+double MaxAbsDiff(const Imath::M44d& a, const Imath::M44d& b) {
   double d = 0;
   for (int i = 0; i < 4; ++i)
-    for (int j = 0; j < 4; ++j) d = std::max(d, std::abs(a.m[i][j] - b.m[i][j]));
+    for (int j = 0; j < 4; ++j) d = std::max(d, std::abs(a[i][j] - b[i][j]));
   return d;
 }
 
 // A camera placed away from the origin, rotated about a skew axis (nothing axis-aligned).
-Mat4d TestWorldToCamera() {
+Imath::M44d TestWorldToCamera() {
   const double n = std::sqrt(0.3 * 0.3 + 0.8 * 0.8 + 0.5 * 0.5);
-  const Mat4d camera_to_world =
+  const Imath::M44d camera_to_world =
       Rotation({0.3 / n, 0.8 / n, 0.5 / n}, 37) * Translation(2.5, -1.25, 4.0);
-  return camera_to_world.inverse();
+  return inverse_checked(camera_to_world);
 }
 
-TEST(Mat4dTest, InverseRoundTrip) {
-  Mat4d a = TestWorldToCamera() * CameraToNdc(700, 650, 400, 260, 800, 600);
-  a.m[3][3] = 0.25;  // make it a general (invertible) matrix, not just a camera
-  const Mat4d i = a * a.inverse();
-  const Mat4d j = a.inverse() * a;
+TEST(MatrixTest, InverseRoundTrip) {
+  Imath::M44d a = TestWorldToCamera() * CameraToNdc(700, 650, 400, 260, 800, 600);
+  a[3][3] = 0.25;  // make it a general (invertible) matrix, not just a camera
+  const Imath::M44d i = a * inverse_checked(a);
+  const Imath::M44d j = inverse_checked(a) * a;
   // Double precision on entries of order 1..10: 1e-12 is ~1e4 ulps of slack.
-  EXPECT_LT(MaxAbsDiff(i, Mat4d()), 1e-12);
-  EXPECT_LT(MaxAbsDiff(j, Mat4d()), 1e-12);
+  EXPECT_LT(MaxAbsDiff(i, Imath::M44d()), 1e-12);
+  EXPECT_LT(MaxAbsDiff(j, Imath::M44d()), 1e-12);
 }
 
-TEST(Mat4dTest, ProductAppliesLeftFirst) {
-  const Mat4d a = Rotation({0, 0, 1}, 90), b = Translation(1, 2, 3);
-  const Vec3d p{1, 0, 0};
-  const Vec3d q = (a * b).transform_point(p);
+TEST(MatrixTest, ProductAppliesLeftFirst) {
+  const Imath::M44d a = Rotation({0, 0, 1}, 90), b = Translation(1, 2, 3);
+  const Imath::V3d p{1, 0, 0};
+  const Imath::V3d q = p * (a * b);
   // Rotating (1,0,0) by 90 degrees about z gives (0,1,0); then the translation.
   EXPECT_NEAR(q.x, 1, 1e-15);
   EXPECT_NEAR(q.y, 3, 1e-15);
   EXPECT_NEAR(q.z, 3, 1e-15);
-  const Vec3d d = (a * b).transform_dir(p);  // directions ignore translation
+  Imath::V3d d(0);
+  (a * b).multDirMatrix(p, d);  // directions ignore translation
   EXPECT_NEAR(d.x, 0, 1e-15);
   EXPECT_NEAR(d.y, 1, 1e-15);
   EXPECT_NEAR(d.z, 0, 1e-15);
 }
 
-TEST(Mat4dTest, SingularThrowsInput) {
-  Mat4d a = TestWorldToCamera();
-  for (int j = 0; j < 4; ++j) a.m[2][j] = 2 * a.m[0][j];  // two parallel rows
-  ExpectError([&] { a.inverse(); }, ErrorKind::kInput, "singular");
-  Mat4d zero = Diagonal(0, 0, 0);
-  zero.m[3][3] = 0;
-  ExpectError([&] { zero.inverse(); }, ErrorKind::kInput, "singular");
-  Mat4d nan = Mat4d();
-  nan.m[1][2] = std::nan("");
-  ExpectError([&] { nan.inverse(); }, ErrorKind::kInput, "non-finite");
+TEST(MatrixTest, SingularThrowsInput) {
+  Imath::M44d a = TestWorldToCamera();
+  for (int j = 0; j < 4; ++j) a[2][j] = 2 * a[0][j];  // two parallel rows
+  ExpectError([&] { inverse_checked(a); }, ErrorKind::kInput, "singular");
+  Imath::M44d zero = Diagonal(0, 0, 0);
+  zero[3][3] = 0;
+  ExpectError([&] { inverse_checked(zero); }, ErrorKind::kInput, "singular");
+  Imath::M44d nan = Imath::M44d();
+  nan[1][2] = std::nan("");
+  ExpectError([&] { inverse_checked(nan); }, ErrorKind::kInput, "non-finite");
 }
 
-TEST(Mat4dTest, SmallScaleIsNotSingular) {
+TEST(MatrixTest, SmallScaleIsNotSingular) {
   // The test is relative, so a camera in micrometres or light years inverts fine.
-  const Mat4d tiny = Diagonal(1e-6, 1e-6, 1e-6) * Translation(3e-6, 0, 1e-6);
-  EXPECT_LT(MaxAbsDiff(tiny * tiny.inverse(), Mat4d()), 1e-12);
-  const Mat4d huge = Translation(1e9, -2e9, 5e8);
-  EXPECT_LT(MaxAbsDiff(huge * huge.inverse(), Mat4d()), 1e-6);
+  const Imath::M44d tiny = Diagonal(1e-6, 1e-6, 1e-6) * Translation(3e-6, 0, 1e-6);
+  EXPECT_LT(MaxAbsDiff(tiny * inverse_checked(tiny), Imath::M44d()), 1e-12);
+  const Imath::M44d huge = Translation(1e9, -2e9, 5e8);
+  EXPECT_LT(MaxAbsDiff(huge * inverse_checked(huge), Imath::M44d()), 1e-6);
 }
 
 TEST(CameraFromFovTest, HfovRoundTrip) {
@@ -182,13 +183,13 @@ TEST(CameraTest, UnprojectProjectRoundTrip) {
   for (double py : {0.5, 123.25, 599.5})
     for (double px : {0.5, 401.75, 799.5})
       for (double z : {1e-4, 1.0, 37.5, 1e10}) {
-        const Vec3d p = c.unproject(px, py, z);
+        const Imath::V3d p = c.unproject(px, py, z);
         EXPECT_DOUBLE_EQ(p.z, z);
         double qx, qy;
         c.project(p, &qx, &qy);
         EXPECT_NEAR(qx, px, 1e-9);
         EXPECT_NEAR(qy, py, 1e-9);
-        const Vec3d d = c.view_dir(px, py);
+        const Imath::V3d d = c.view_dir(px, py);
         EXPECT_NEAR(d.x * d.x + d.y * d.y + d.z * d.z, 1, 1e-15);
         EXPECT_NEAR(d.x / d.z, p.x / p.z, 1e-12);  // along the same ray
         EXPECT_NEAR(d.y / d.z, p.y / p.z, 1e-12);
@@ -200,8 +201,8 @@ TEST(CameraFromMatricesTest, ProjectsKnownPointOffCentre) {
   // lens shift or screenWindowCenter gives), rotated about a skew axis, away from the origin.
   const int w = 800, h = 600;
   const double fx = 700, fy = 650, cx = 490, cy = 260;
-  const Mat4d w2c = TestWorldToCamera();
-  const Mat4d w2ndc = w2c * CameraToNdc(fx, fy, cx, cy, w, h);
+  const Imath::M44d w2c = TestWorldToCamera();
+  const Imath::M44d w2ndc = w2c * CameraToNdc(fx, fy, cx, cy, w, h);
   const Camera c = camera_from_matrices(w2c, w2ndc, Box2i{0, 0, w, h}, "shifted.exr");
   EXPECT_NEAR(c.fx, fx, 1e-9);
   EXPECT_NEAR(c.fy, fy, 1e-9);
@@ -211,14 +212,14 @@ TEST(CameraFromMatricesTest, ProjectsKnownPointOffCentre) {
 
   // A world point that lands at a known pixel: unproject that pixel with the intrinsics.
   const double want_x = 123.4, want_y = 456.7, depth = 7.5;
-  const Vec3d p_cam{(want_x - cx) / fx * depth, (cy - want_y) / fy * depth, depth};
-  const Vec3d p_world = w2c.inverse().transform_point(p_cam);
+  const Imath::V3d p_cam{(want_x - cx) / fx * depth, (cy - want_y) / fy * depth, depth};
+  const Imath::V3d p_world = p_cam * inverse_checked(w2c);
   double px, py;
-  c.project(c.world_to_camera.transform_point(p_world), &px, &py);
+  c.project(p_world * c.world_to_camera, &px, &py);
   EXPECT_NEAR(px, want_x, 1e-4);
   EXPECT_NEAR(py, want_y, 1e-4);
   // The matrices themselves agree: pixel = NDC * (W, H).
-  const Vec3d ndc = w2ndc.transform_point(p_world);
+  const Imath::V3d ndc = p_world * w2ndc;
   EXPECT_NEAR(ndc.x * w, want_x, 1e-4);
   EXPECT_NEAR(ndc.y * h, want_y, 1e-4);
   // hfov over the shifted window: the two half-angles differ.
@@ -229,10 +230,10 @@ TEST(CameraFromMatricesTest, NormalisesOpenGlAndLeftHandedCameraSpaces) {
   // The same camera written with -z forward (OpenGL, Arnold, Blender) or x pointing left
   // (OpenEXR's own text): the result must be the same camera and the same pixels.
   const int w = 640, h = 480;
-  const Mat4d w2c = TestWorldToCamera();
-  const Mat4d w2ndc = w2c * CameraToNdc(500, 500, 300, 250, w, h);
+  const Imath::M44d w2c = TestWorldToCamera();
+  const Imath::M44d w2ndc = w2c * CameraToNdc(500, 500, 300, 250, w, h);
   const Camera ref = camera_from_matrices(w2c, w2ndc, Box2i{0, 0, w, h}, "ref.exr");
-  for (const Mat4d& flip : {Diagonal(1, 1, -1), Diagonal(-1, 1, 1), Diagonal(-1, -1, -1)}) {
+  for (const Imath::M44d& flip : {Diagonal(1, 1, -1), Diagonal(-1, 1, 1), Diagonal(-1, -1, -1)}) {
     const Camera c = camera_from_matrices(w2c * flip, w2ndc, Box2i{0, 0, w, h}, "flip.exr");
     EXPECT_NEAR(c.fx, ref.fx, 1e-9);
     EXPECT_NEAR(c.fy, ref.fy, 1e-9);
@@ -244,18 +245,18 @@ TEST(CameraFromMatricesTest, NormalisesOpenGlAndLeftHandedCameraSpaces) {
 
 TEST(CameraFromMatricesTest, RejectsNonPerspective) {
   const Box2i display{0, 0, 320, 180};
-  const Mat4d w2c = TestWorldToCamera();
+  const Imath::M44d w2c = TestWorldToCamera();
   // Orthographic: NDC = affine function of camera x, y; w = 1.
-  Mat4d ortho;
-  ortho.m[0][0] = 0.1;
-  ortho.m[1][1] = -0.1;
-  ortho.m[3][0] = 0.5;
-  ortho.m[3][1] = 0.5;
+  Imath::M44d ortho;
+  ortho[0][0] = 0.1;
+  ortho[1][1] = -0.1;
+  ortho[3][0] = 0.5;
+  ortho[3][1] = 0.5;
   ExpectError([&] { camera_from_matrices(w2c, w2c * ortho, display, "ortho.exr"); },
               ErrorKind::kInput, "not a perspective projection");
   // All zeros.
-  Mat4d zero = Diagonal(0, 0, 0);
-  zero.m[3][3] = 0;
+  Imath::M44d zero = Diagonal(0, 0, 0);
+  zero[3][3] = 0;
   ExpectError([&] { camera_from_matrices(w2c, zero, display, "zero.exr"); }, ErrorKind::kInput,
               "not a perspective projection");
   // Singular worldToCamera, named with the file.
@@ -267,42 +268,42 @@ TEST(CameraFromMatricesTest, RejectsNonPerspective) {
     EXPECT_EQ(e.file(), "sing.exr");
   }
   // Skewed image plane.
-  Mat4d skew = CameraToNdc(300, 300, 160, 90, 320, 180);
-  skew.m[1][0] = 0.2;
+  Imath::M44d skew = CameraToNdc(300, 300, 160, 90, 320, 180);
+  skew[1][0] = 0.2;
   ExpectError([&] { camera_from_matrices(w2c, w2c * skew, display, "skew.exr"); },
               ErrorKind::kInput, "skew");
   // Centre of projection 1 unit behind the camera: w = z + 1.
-  Mat4d moved = CameraToNdc(300, 300, 160, 90, 320, 180);
-  moved.m[3][3] = 1;
+  Imath::M44d moved = CameraToNdc(300, 300, 160, 90, 320, 180);
+  moved[3][3] = 1;
   ExpectError([&] { camera_from_matrices(w2c, w2c * moved, display, "moved.exr"); },
               ErrorKind::kInput, "centre of projection");
   // A -1..1 screen matrix under the name worldToNDC (3Delight's header in
   // johannesvollmer/exrs#83: 30 degrees, 2048 x 2048).
-  Mat4d screen;
-  screen.m[0][0] = screen.m[1][1] = 3.73205;
-  screen.m[2][3] = 1;
-  screen.m[3][2] = -0.001;
-  screen.m[3][3] = 0;
-  ExpectError([&] { camera_from_matrices(Mat4d(), screen, display, "3dl.exr"); }, ErrorKind::kInput,
-              "screen-space");
+  Imath::M44d screen;
+  screen[0][0] = screen[1][1] = 3.73205;
+  screen[2][3] = 1;
+  screen[3][2] = -0.001;
+  screen[3][3] = 0;
+  ExpectError([&] { camera_from_matrices(Imath::M44d(), screen, display, "3dl.exr"); },
+              ErrorKind::kInput, "screen-space");
   // Non-finite entries.
-  Mat4d inf = w2c * CameraToNdc(300, 300, 160, 90, 320, 180);
-  inf.m[2][0] = INFINITY;
+  Imath::M44d inf = w2c * CameraToNdc(300, 300, 160, 90, 320, 180);
+  inf[2][0] = INFINITY;
   ExpectError([&] { camera_from_matrices(w2c, inf, display, "inf.exr"); }, ErrorKind::kInput,
               "non-finite");
 }
 
-void SetMatrix(OIIO::ImageSpec* spec, const std::string& name, const Mat4d& m) {
+void SetMatrix(OIIO::ImageSpec* spec, const std::string& name, const Imath::M44d& m) {
   float f[16];
-  for (int i = 0; i < 16; ++i) f[i] = static_cast<float>(m.m[i / 4][i % 4]);
+  for (int i = 0; i < 16; ++i) f[i] = static_cast<float>(m[i / 4][i % 4]);
   spec->attribute(name, OIIO::TypeMatrix44, f);
 }
 
 OIIO::ImageSpec SpecOf(int w, int h) { return OIIO::ImageSpec(w, h, 3, OIIO::TypeFloat); }
 
 // Pixel of a world point through a camera.
-void PixelOf(const Camera& c, const Vec3d& world, double* px, double* py) {
-  c.project(c.world_to_camera.transform_point(world), px, py);
+void PixelOf(const Camera& c, const Imath::V3d& world, double* px, double* py) {
+  c.project(world * c.world_to_camera, px, py);
 }
 
 TEST(CameraFromHeaderTest, NoCameraAttributesGivesNullopt) {
@@ -316,8 +317,8 @@ TEST(CameraFromHeaderTest, NoCameraAttributesGivesNullopt) {
 TEST(CameraFromHeaderTest, StandardAndNukeNamesAgree) {
   const int w = 320, h = 180;
   const Box2i display{0, 0, w, h};
-  const Mat4d w2c = TestWorldToCamera();
-  const Mat4d w2ndc = w2c * CameraToNdc(200, 200, 170, 80, w, h);
+  const Imath::M44d w2c = TestWorldToCamera();
+  const Imath::M44d w2ndc = w2c * CameraToNdc(200, 200, 170, 80, w, h);
   const Camera ref = camera_from_matrices(w2c, w2ndc, display, "ref");
   for (const std::string prefix : {"", "exr/"}) {
     OIIO::ImageSpec spec = SpecOf(w, h);
@@ -339,10 +340,10 @@ TEST(CameraFromHeaderTest, WorldToScreenUsesScreenWindow) {
   const int w = 400, h = 300;
   const double pa = 1.5, sw = 2.0, scx = 0.2, scy = -0.1;
   const double sh = sw * h / (w * pa);  // OpenEXR: height from width, display window, aspect
-  const Mat4d w2c = TestWorldToCamera();
-  Mat4d cam_to_screen;  // screen = (x/z, y/z): the z = 1 plane
-  cam_to_screen.m[2][3] = 1;
-  cam_to_screen.m[3][3] = 0;
+  const Imath::M44d w2c = TestWorldToCamera();
+  Imath::M44d cam_to_screen;  // screen = (x/z, y/z): the z = 1 plane
+  cam_to_screen[2][3] = 1;
+  cam_to_screen[3][3] = 0;
   OIIO::ImageSpec spec = SpecOf(w, h);
   SetMatrix(&spec, "worldToCamera", w2c);
   SetMatrix(&spec, "worldToScreen", w2c * cam_to_screen);
@@ -385,10 +386,10 @@ TEST(CameraFromHeaderTest, VRayCameraTransformAndFov) {
   EXPECT_GT(px, w / 2.0);
 
   // V-Ray for Maya frame: -Y forward, -Z up; written with the translation in the last column.
-  Mat4d column_form = Mat4d();
-  column_form.m[0][3] = 1;
-  column_form.m[1][3] = 2;
-  column_form.m[2][3] = 3;
+  Imath::M44d column_form = Imath::M44d();
+  column_form[0][3] = 1;
+  column_form[1][3] = 2;
+  column_form[2][3] = 3;
   OIIO::ImageSpec maya = SpecOf(w, h);
   SetMatrix(&maya, "cameraTransform", column_form);
   maya.attribute("cameraFov", 60.0f);
@@ -425,7 +426,7 @@ TEST(CameraFromHeaderTest, ArnoldLensAttributes) {
   PixelOf(*c, {0, 0, 0}, &px, &py);
   EXPECT_NEAR(px, w / 2.0, 1e-9);
   EXPECT_NEAR(py, h / 2.0, 1e-9);
-  EXPECT_GT(c->world_to_camera.transform_point({0, 0, 0}).z, 0);
+  EXPECT_GT((Imath::V3d(0) * c->world_to_camera).z, 0);
   // CameraFov, when written, wins over focal length and aperture.
   spec.attribute("CameraFov", 50.0f);
   EXPECT_NEAR(detail::camera_from_header(spec, display, "ai.exr")->hfov_deg(w), 50, 1e-5);
@@ -470,13 +471,13 @@ TEST_F(SidecarTest, PerFrameFovAndStaticFallback) {
 }
 
 TEST_F(SidecarTest, StaticMatricesAndFovWithTransform) {
-  const Mat4d w2c = TestWorldToCamera();
-  const Mat4d ndc = w2c * CameraToNdc(200, 200, 150, 95, 320, 180);
-  auto flat = [](const Mat4d& m) {
+  const Imath::M44d w2c = TestWorldToCamera();
+  const Imath::M44d ndc = w2c * CameraToNdc(200, 200, 150, 95, 320, 180);
+  auto flat = [](const Imath::M44d& m) {
     std::string s = "[";
     for (int i = 0; i < 16; ++i) {
       char buf[40];
-      std::snprintf(buf, sizeof buf, "%.17g", m.m[i / 4][i % 4]);
+      std::snprintf(buf, sizeof buf, "%.17g", m[i / 4][i % 4]);
       s += (i ? "," : "") + std::string(buf);
     }
     return s + "]";
@@ -590,8 +591,8 @@ TEST(SampleDataTest, HeaderCameraMatchesPositionAndDepth) {
           const std::size_t i = static_cast<std::size_t>(y) * spec.width + x;
           const double depth = planes[3][i];
           if (!(depth < 1e9)) continue;  // background: 1e10
-          const Vec3d p =
-              c->world_to_camera.transform_point({planes[0][i], planes[1][i], planes[2][i]});
+          const Imath::V3d p =
+              Imath::V3d(planes[0][i], planes[1][i], planes[2][i]) * c->world_to_camera;
           double px, py;
           c->project(p, &px, &py);
           dx.push_back(px - (x + 0.5));

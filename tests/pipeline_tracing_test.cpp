@@ -29,7 +29,7 @@ struct Groove {
   double length;  // the upper face's length in the cross-section, crease to the frame's top
   // The view factor of the whole upper face from pixel (x, y) of the lower face.
   double view_factor(int x, int y) const {
-    const Vec3d p = f.g.camera.unproject(x + 0.5, y + 0.5, f.g.depth.at(0, x, y));
+    const Imath::V3d p = f.g.camera.unproject(x + 0.5, y + 0.5, f.g.depth.at(0, x, y));
     const double d = std::hypot(p.y, p.z - 10.0);
     return 0.5 * (1 - d / std::hypot(d, length));
   }
@@ -166,34 +166,34 @@ TEST(Pipeline, MultiframeFindsALitFaceOnlyANeighbourShows) {
   a.frame = 1;
   const double pitch = 6.0 * M_PI / 180.0;
   // Camera 1's axes in world space; world_to_camera's columns (row-vector convention).
-  const Vec3d right{1, 0, 0}, up{0, std::cos(pitch), std::sin(pitch)},
+  const Imath::V3d right{1, 0, 0}, up{0, std::cos(pitch), std::sin(pitch)},
       forward{0, -std::sin(pitch), std::cos(pitch)};
-  const Vec3d axes[3] = {right, up, forward};
-  const Vec3d centre{0.4, 0.0, -0.5};
+  const Imath::V3d axes[3] = {right, up, forward};
+  const Imath::V3d centre{0.4, 0.0, -0.5};
   for (int j = 0; j < 3; ++j) {
-    a.camera.world_to_camera.m[0][j] = axes[j].x;
-    a.camera.world_to_camera.m[1][j] = axes[j].y;
-    a.camera.world_to_camera.m[2][j] = axes[j].z;
-    a.camera.world_to_camera.m[3][j] =
+    a.camera.world_to_camera[0][j] = axes[j].x;
+    a.camera.world_to_camera[1][j] = axes[j].y;
+    a.camera.world_to_camera[2][j] = axes[j].z;
+    a.camera.world_to_camera[3][j] =
         -(centre.x * axes[j].x + centre.y * axes[j].y + centre.z * axes[j].z);
   }
   const Camera& cam = a.camera;
   const int w = a.width(), h = a.height();
   const double r = std::sqrt(0.5);
-  std::vector<Vec3d> point(static_cast<std::size_t>(w) * h);  // world space
+  std::vector<Imath::V3d> point(static_cast<std::size_t>(w) * h, Imath::V3d(0));  // world space
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
       const double c[3] = {(x + 0.5 - cam.cx) / cam.fx, (cam.cy - (y + 0.5)) / cam.fy, 1.0};
-      const Vec3d d{c[0] * right.x + c[1] * up.x + c[2] * forward.x,
-                    c[0] * right.y + c[1] * up.y + c[2] * forward.y,
-                    c[0] * right.z + c[1] * up.z + c[2] * forward.z};
+      const Imath::V3d d{c[0] * right.x + c[1] * up.x + c[2] * forward.x,
+                         c[0] * right.y + c[1] * up.y + c[2] * forward.y,
+                         c[0] * right.z + c[1] * up.z + c[2] * forward.z};
       // The lower face: z - y = 10, y < 0.
       const double t = (10.0 - centre.z + centre.y) / (d.z - d.y);
-      const Vec3d p{centre.x + t * d.x, centre.y + t * d.y, centre.z + t * d.z};
+      const Imath::V3d p{centre.x + t * d.x, centre.y + t * d.y, centre.z + t * d.z};
       ASSERT_LT(p.y, 0.0);
       point[static_cast<std::size_t>(y) * w + x] = p;
       a.depth.at(0, x, y) = static_cast<float>(t);  // camera 1's z of the point
-      const Vec3d n{0, r, -r};
+      const Imath::V3d n{0, r, -r};
       for (int k = 0; k < 3; ++k)
         a.normal.at(k, x, y) =
             static_cast<float>(n.x * axes[k].x + n.y * axes[k].y + n.z * axes[k].z);
@@ -211,17 +211,17 @@ TEST(Pipeline, MultiframeFindsALitFaceOnlyANeighbourShows) {
 
   // The expected share, over a grid of cosine-weighted directions.
   const Camera& camera_b = b.camera;
-  auto expected = [&](const Vec3d& p) {
+  auto expected = [&](const Imath::V3d& p) {
     constexpr int kSide = 200;
     int lit = 0;
     for (int i = 0; i < kSide; ++i)
       for (int j = 0; j < kSide; ++j) {
-        const detail::Vec3f d =
+        const Imath::V3f d =
             detail::cosine_hemisphere({0.0f, static_cast<float>(r), static_cast<float>(-r)},
                                       (i + 0.5f) / kSide, (j + 0.5f) / kSide);
         const double t = (10.0 - p.z - p.y) / (d.z + d.y);  // the upper face: z + y = 10
         if (!(t > 0)) continue;
-        const Vec3d q{p.x + t * d.x, p.y + t * d.y, p.z + t * d.z};
+        const Imath::V3d q{p.x + t * d.x, p.y + t * d.y, p.z + t * d.z};
         double qx, qy;
         camera_b.project(q, &qx, &qy);
         if (q.y > 0 && q.z > 0 && qx >= 0 && qx <= w && qy >= 0 && qy <= h) ++lit;

@@ -99,11 +99,11 @@ TEST(Reference, ExtendMissesSeeTheEnvironment) {
 // along `d`, cast from pixel (x, y), over its screen segment (clipped as the march clips it) in
 // steps of 1/1000 pixel and returns the pixel DepthMesh::surface_at names at the first point
 // inside a slab and outside the ray's own pixel, or -1.
-int dense_walk(const GBuffer& g, const detail::DepthMesh& mesh, const detail::Vec3f& o,
-               const detail::Vec3f& d, int x, int y) {
+int dense_walk(const GBuffer& g, const detail::DepthMesh& mesh, const Imath::V3f& o,
+               const Imath::V3f& d, int x, int y) {
   float t_end = 1e6f * o.z;
   if (d.z < 0) t_end = std::min(t_end, (o.z - 1e-3f * o.z) / -d.z);
-  const detail::Vec3f e{o.x + t_end * d.x, o.y + t_end * d.y, o.z + t_end * d.z};
+  const Imath::V3f e{o.x + t_end * d.x, o.y + t_end * d.y, o.z + t_end * d.z};
   const Camera& cam = g.camera;
   const double sx0 = cam.cx + cam.fx * o.x / o.z, sy0 = cam.cy - cam.fy * o.y / o.z;
   const double dx = cam.cx + cam.fx * e.x / e.z - sx0, dy = cam.cy - cam.fy * e.y / e.z - sy0;
@@ -152,11 +152,11 @@ TEST(Reference, AgreesWithADenseWalkThroughTheModel) {
     if (!g.is_surface(x, y)) continue;
     // The rays of march.cpp's trace_pixel (the sample's data window is its display window).
     const float z = g.depth.at(0, x, y);
-    const Vec3d c = g.camera.unproject(x + 0.5, y + 0.5, z);
-    const detail::Vec3f n{g.normal.at(0, x, y), g.normal.at(1, x, y), g.normal.at(2, x, y)};
+    const Imath::V3d c = g.camera.unproject(x + 0.5, y + 0.5, z);
+    const Imath::V3f n{g.normal.at(0, x, y), g.normal.at(1, x, y), g.normal.at(2, x, y)};
     const float off = static_cast<float>(s.start_offset) * z;
-    const detail::Vec3f o{static_cast<float>(c.x) + n.x * off, static_cast<float>(c.y) + n.y * off,
-                          static_cast<float>(c.z) + n.z * off};
+    const Imath::V3f o{static_cast<float>(c.x) + n.x * off, static_cast<float>(c.y) + n.y * off,
+                       static_cast<float>(c.z) + n.z * off};
     const detail::PixelNoise noise = detail::pixel_noise(x, y, g.frame, s.seed);
     for (int k = 0; k < s.rays; ++k) {
       float u1, u2, jitter;

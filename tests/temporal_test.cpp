@@ -39,38 +39,35 @@ std::vector<GBuffer> load_fixture(const std::string& name) {
   return frames;
 }
 
-Vec3d add(const Vec3d& a, const Vec3d& b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-Vec3d scale(const Vec3d& a, double s) { return {a.x * s, a.y * s, a.z * s}; }
-
 // A camera sliding sideways (world = camera axes: x right, y up, z forward) over a floor and a
 // wall, with a sphere moving in front of them. Ray cast through pixel centres; motion vectors
 // project each hit point, moved with its object, through the neighbouring frames' cameras.
 struct Shot {
   int width = 64, height = 48;
   double hfov_deg = 60;
-  Vec3d camera_velocity{0.1, 0, 0};  // per frame
-  Vec3d sphere_start{-1.5, -0.3, 5}, sphere_velocity{0.4, 0, 0.05};
+  Imath::V3d camera_velocity{0.1, 0, 0};  // per frame
+  Imath::V3d sphere_start{-1.5, -0.3, 5}, sphere_velocity{0.4, 0, 0.05};
   double sphere_radius = 0.7;
   double wall_z = 8, floor_y = -1;
 
-  Vec3d camera_position(int frame) const { return scale(camera_velocity, frame); }
-  Vec3d sphere_centre(int frame) const { return add(sphere_start, scale(sphere_velocity, frame)); }
+  Imath::V3d camera_position(int frame) const { return camera_velocity * frame; }
+  Imath::V3d sphere_centre(int frame) const { return sphere_start + sphere_velocity * frame; }
   Camera camera(int frame) const {
     Camera c = camera_from_fov(hfov_deg, {0, 0, width, height});
     c.has_world_transform = true;
-    const Vec3d p = camera_position(frame);
-    c.world_to_camera.m[3][0] = -p.x;
-    c.world_to_camera.m[3][1] = -p.y;
-    c.world_to_camera.m[3][2] = -p.z;
+    const Imath::V3d p = camera_position(frame);
+    c.world_to_camera[3][0] = -p.x;
+    c.world_to_camera[3][1] = -p.y;
+    c.world_to_camera[3][2] = -p.z;
     return c;
   }
   GBuffer render(int frame) const;
 };
 
 // Display position of world point p seen by `camera` placed at `position`.
-Vec3d project(const Camera& camera, const Vec3d& position, const Vec3d& p) {
+Imath::V3d project(const Camera& camera, const Imath::V3d& position, const Imath::V3d& p) {
   double px, py;
-  const Vec3d c{p.x - position.x, p.y - position.y, p.z - position.z};
+  const Imath::V3d c{p.x - position.x, p.y - position.y, p.z - position.z};
   camera.project(c, &px, &py);
   return {px, py, c.z};
 }
@@ -85,13 +82,13 @@ GBuffer Shot::render(int frame) const {
   g.normal = Image(width, height, 3);
   g.motion_prev = Image(width, height, 2);
   g.motion_next = Image(width, height, 2);
-  const Vec3d eye = camera_position(frame), centre = sphere_centre(frame);
+  const Imath::V3d eye = camera_position(frame), centre = sphere_centre(frame);
   for (int y = 0; y < height; ++y) {
     for (int x = 0; x < width; ++x) {
       const double px = x + 0.5, py = y + 0.5;
-      const Vec3d d = g.camera.unproject(px, py, 1.0);  // d.z = 1: t is planar depth
+      const Imath::V3d d = g.camera.unproject(px, py, 1.0);  // d.z = 1: t is planar depth
       double t = wall_z - eye.z;
-      Vec3d n{0, 0, -1}, velocity{0, 0, 0};
+      Imath::V3d n{0, 0, -1}, velocity{0, 0, 0};
       if (d.y < 0) {
         const double t_floor = (floor_y - eye.y) / d.y;
         if (t_floor < t) {
@@ -99,7 +96,7 @@ GBuffer Shot::render(int frame) const {
           n = {0, 1, 0};
         }
       }
-      const Vec3d oc{eye.x - centre.x, eye.y - centre.y, eye.z - centre.z};
+      const Imath::V3d oc{eye.x - centre.x, eye.y - centre.y, eye.z - centre.z};
       const double a = d.x * d.x + d.y * d.y + d.z * d.z, b = oc.x * d.x + oc.y * d.y + oc.z * d.z;
       const double disc =
           b * b - a * (oc.x * oc.x + oc.y * oc.y + oc.z * oc.z - sphere_radius * sphere_radius);
@@ -107,19 +104,19 @@ GBuffer Shot::render(int frame) const {
         const double t_sphere = (-b - std::sqrt(disc)) / a;
         if (t_sphere > 0 && t_sphere < t) {
           t = t_sphere;
-          const Vec3d p = add(eye, scale(d, t));
-          n = scale({p.x - centre.x, p.y - centre.y, p.z - centre.z}, 1 / sphere_radius);
+          const Imath::V3d p = eye + d * t;
+          n = (p - centre) * (1 / sphere_radius);
           velocity = sphere_velocity;
         }
       }
-      const Vec3d p = add(eye, scale(d, t));
+      const Imath::V3d p = eye + d * t;
       g.depth.at(0, x, y) = static_cast<float>(t);
       g.normal.at(0, x, y) = static_cast<float>(n.x);
       g.normal.at(1, x, y) = static_cast<float>(n.y);
       g.normal.at(2, x, y) = static_cast<float>(n.z);
-      const Vec3d prev =
-          project(camera(frame - 1), camera_position(frame - 1), add(p, scale(velocity, -1)));
-      const Vec3d next = project(camera(frame + 1), camera_position(frame + 1), add(p, velocity));
+      const Imath::V3d prev =
+          project(camera(frame - 1), camera_position(frame - 1), p + velocity * -1.0);
+      const Imath::V3d next = project(camera(frame + 1), camera_position(frame + 1), p + velocity);
       g.motion_prev.at(0, x, y) = static_cast<float>(prev.x - px);
       g.motion_prev.at(1, x, y) = static_cast<float>(prev.y - py);
       g.motion_next.at(0, x, y) = static_cast<float>(next.x - px);

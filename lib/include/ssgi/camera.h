@@ -1,32 +1,18 @@
 // Pinhole cameras: where they come from (EXR header, sidecar, --fov) and how they project.
 #pragma once
 
+#include <Imath/ImathMatrix.h>
+#include <Imath/ImathVec.h>
+
 #include <string>
 
 #include "ssgi/image.h"
 
 namespace ssgi {
 
-// A point or direction in double precision.
-struct Vec3d {
-  double x = 0, y = 0, z = 0;
-};
-
-// A 4x4 matrix in Imath's row-vector convention, as OpenEXR headers store it:
-// p' = p * M, translation in m[3][0..2]. Identity by default.
-struct Mat4d {
-  double m[4][4] = {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}};
-
-  // Row-vector composition: p * (A * B) = (p * A) * B, i.e. A first, then B.
-  Mat4d operator*(const Mat4d& o) const;
-  // Throws Error(kInput) when singular: |det| below 1e-12 times the product of the row
-  // lengths (a scale-free test), or any entry not finite.
-  Mat4d inverse() const;
-  // Homogeneous point transform with the divide by w.
-  Vec3d transform_point(const Vec3d& p) const;
-  // Direction transform (no translation, no divide).
-  Vec3d transform_dir(const Vec3d& d) const;
-};
+// The inverse of a 4x4 matrix. Throws Error(kInput) when singular: |det| below 1e-12 times the
+// product of the row lengths (a scale-free test), or any entry not finite.
+Imath::M44d inverse_checked(const Imath::M44d& m);
 
 // A pinhole camera in the library's camera space (OpenEXR worldToCamera: x right, y up,
 // +z forward, depth positive in front) projecting onto display-window pixels, y down.
@@ -39,7 +25,9 @@ struct Camera {
   // Whether world_to_camera is known (header matrices or sidecar); a --fov camera has none,
   // and then world-space inputs (normals, env maps) are taken as camera-space.
   bool has_world_transform = false;
-  Mat4d world_to_camera;
+  // Imath's row-vector convention, as OpenEXR headers store it: p' = p * M, translation in
+  // row 3. Identity by default.
+  Imath::M44d world_to_camera;
   // Human-readable origin, e.g. "header worldToCamera/worldToNDC", "sidecar cam.json", "--fov".
   std::string source;
 
@@ -47,11 +35,11 @@ struct Camera {
   double hfov_deg(int display_width) const;
   // Camera-space point to continuous display-window pixel coordinates. Meaningful for
   // p.z > 0 only: the caller tests z (behind the camera the result is mirrored or infinite).
-  void project(const Vec3d& p, double* px, double* py) const;
+  void project(const Imath::V3d& p, double* px, double* py) const;
   // Continuous display-window pixel coordinates and planar depth z to a camera-space point.
-  Vec3d unproject(double px, double py, double z) const;
+  Imath::V3d unproject(double px, double py, double z) const;
   // Unit camera-space view direction through continuous pixel coordinates.
-  Vec3d view_dir(double px, double py) const;
+  Imath::V3d view_dir(double px, double py) const;
 };
 
 // A centred camera with the given horizontal field of view over the display window and
@@ -66,7 +54,7 @@ Camera camera_from_fov(double hfov_deg, const Box2i& display_window, double pixe
 // +z forward. Throws Error(kInput) naming `file` on a singular or non-finite matrix, or when
 // inverse(worldToCamera) * worldToNDC is not a pinhole projection at the camera origin
 // (orthographic, skewed, tilted) or looks like a -1..1 screen matrix.
-Camera camera_from_matrices(const Mat4d& world_to_camera, const Mat4d& world_to_ndc,
+Camera camera_from_matrices(const Imath::M44d& world_to_camera, const Imath::M44d& world_to_ndc,
                             const Box2i& display_window, const std::string& file);
 
 }  // namespace ssgi

@@ -46,7 +46,7 @@ void ray_sample(const PixelNoise& noise, int k, float* u1, float* u2, float* jit
   *jitter = static_cast<float>(fract(noise.jitter + kGolden * k));
 }
 
-Vec3f cosine_hemisphere(const Vec3f& n, float u1, float u2) {
+Imath::V3f cosine_hemisphere(const Imath::V3f& n, float u1, float u2) {
   const float r = std::sqrt(u1);
   const float phi = static_cast<float>(2.0 * kPi) * u2;
   const float lx = r * std::cos(phi);
@@ -55,10 +55,9 @@ Vec3f cosine_hemisphere(const Vec3f& n, float u1, float u2) {
   const float sign = std::copysign(1.0f, n.z);
   const float a = -1.0f / (sign + n.z);
   const float b = n.x * n.y * a;
-  const Vec3f t{1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x};
-  const Vec3f bt{b, sign + n.y * n.y * a, -n.y};
-  return {lx * t.x + ly * bt.x + lz * n.x, lx * t.y + ly * bt.y + lz * n.y,
-          lx * t.z + ly * bt.z + lz * n.z};
+  const Imath::V3f t{1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x};
+  const Imath::V3f bt{b, sign + n.y * n.y * a, -n.y};
+  return lx * t + ly * bt + lz * n;
 }
 
 }  // namespace ssgi::detail

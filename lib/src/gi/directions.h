@@ -2,13 +2,11 @@
 // low-discrepancy sequence, mapped to cosine-weighted directions around the normal.
 #pragma once
 
+#include <Imath/ImathVec.h>
+
 #include <cstdint>
 
 namespace ssgi::detail {
-
-struct Vec3f {
-  float x, y, z;
-};
 
 // Per-pixel random rotation of the ray set, a pure function of the display-window pixel,
 // the frame and the seed (never of the data window, threads or crops).
@@ -40,6 +38,6 @@ inline float unit_float(std::uint64_t h) {
 
 // Cosine-weighted direction around the unit normal `n` from two uniforms (Malley's method,
 // with the branchless orthonormal basis of Duff et al. 2017).
-Vec3f cosine_hemisphere(const Vec3f& n, float u1, float u2);
+Imath::V3f cosine_hemisphere(const Imath::V3f& n, float u1, float u2);
 
 }  // namespace ssgi::detail

@@ -54,7 +54,7 @@ Environment Environment::from_file(const std::string& path, char up, const Color
   return env;
 }
 
-std::array<float, 3> Environment::radiance(const Vec3f& dir) const {
+std::array<float, 3> Environment::radiance(const Imath::V3f& dir) const {
   if (map_.empty()) return color_;
   const Imath::V3f d =
       up_ == 'z' ? Imath::V3f(dir.y, dir.z, dir.x) : Imath::V3f(dir.x, dir.y, dir.z);

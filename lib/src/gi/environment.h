@@ -31,7 +31,7 @@ class Environment {
   bool is_constant() const { return map_.empty(); }
 
   // Radiance arriving from world-space direction `dir` (need not be unit length).
-  std::array<float, 3> radiance(const Vec3f& dir) const;
+  std::array<float, 3> radiance(const Imath::V3f& dir) const;
 
  private:
   std::array<float, 3> color_;

@@ -211,12 +211,13 @@ struct Tracer {
   // (one per pixel along the major axis when steps allow); its depth is interpolated
   // perspective-correctly (1/z is linear in screen space, McGuire & Mara 2014) and tested against
   // the mesh of surface_model.h.
-  int march_ray(const Vec3f& o, const Vec3f& d, float jitter, int self_x, int self_y) const {
+  int march_ray(const Imath::V3f& o, const Imath::V3f& d, float jitter, int self_x,
+                int self_y) const {
     float t_end =
         settings.max_distance > 0 ? static_cast<float>(settings.max_distance) : kFarFactor * o.z;
     if (d.z < 0) t_end = std::min(t_end, (o.z - kNearFraction * o.z) / -d.z);
     if (!(t_end > 0)) return -1;
-    const Vec3f e{o.x + t_end * d.x, o.y + t_end * d.y, o.z + t_end * d.z};
+    const Imath::V3f e = o + t_end * d;
     const Camera& cam = g.camera;
     // Screen positions in data-window pixel units.
     const float sx0 = static_cast<float>(cam.cx + cam.fx * o.x / o.z) - offset_x;
@@ -241,14 +242,14 @@ struct Tracer {
   // MissMode::kExtend: the surface at the pixel where the ray leaves the screen continues as
   // its tangent plane beyond the edge; a ray that meets that plane from its front side takes
   // the edge pixel's light. Returns the edge pixel's index, or -1.
-  int extend_edge(const Vec3f& o, const Vec3f& d, float exit_x, float exit_y) const {
+  int extend_edge(const Imath::V3f& o, const Imath::V3f& d, float exit_x, float exit_y) const {
     const int ix = std::clamp(static_cast<int>(std::floor(exit_x)), 0, width - 1);
     const int iy = std::clamp(static_cast<int>(std::floor(exit_y)), 0, height - 1);
     const float ze = g.depth.at(0, ix, iy);
     if (!std::isfinite(ze)) return -1;
-    const Vec3f n{g.normal.at(0, ix, iy), g.normal.at(1, ix, iy), g.normal.at(2, ix, iy)};
-    const Vec3d pe = g.camera.unproject(ix + offset_x + 0.5, iy + offset_y + 0.5, ze);
-    const float facing = n.x * d.x + n.y * d.y + n.z * d.z;
+    const Imath::V3f n{g.normal.at(0, ix, iy), g.normal.at(1, ix, iy), g.normal.at(2, ix, iy)};
+    const Imath::V3d pe = g.camera.unproject(ix + offset_x + 0.5, iy + offset_y + 0.5, ze);
+    const float facing = n.dot(d);
     if (!(facing < 0)) return -1;
     const float t =
         (n.x * (static_cast<float>(pe.x) - o.x) + n.y * (static_cast<float>(pe.y) - o.y) +
@@ -265,7 +266,7 @@ struct Tracer {
     const PixelRays rays(g, settings, x, y);
     for (int k = 0; k < settings.rays; ++k) {
       float jitter;
-      const Vec3f d = rays.direction(k, &jitter);
+      const Imath::V3f d = rays.direction(k, &jitter);
       const int hit = march_ray(rays.origin(), d, jitter, x, y);
       on_ray(k, hit >= 0 ? mark_hit(g, hit, rays.origin()) : hit, d);
     }
@@ -274,9 +275,9 @@ struct Tracer {
 
 }  // namespace
 
-std::int32_t mark_hit(const GBuffer& g, std::int32_t hit, const Vec3f& origin) {
+std::int32_t mark_hit(const GBuffer& g, std::int32_t hit, const Imath::V3f& origin) {
   const int x = hit % g.width(), y = hit / g.width();
-  const Vec3d p =
+  const Imath::V3d p =
       g.camera.unproject(x + g.data_window.x0 - g.display_window.x0 + 0.5,
                          y + g.data_window.y0 - g.display_window.y0 + 0.5, g.depth.plane(0)[hit]);
   const double in_front = (origin.x - p.x) * g.normal.plane(0)[hit] +
@@ -289,7 +290,7 @@ PixelRays::PixelRays(const GBuffer& g, const GiSettings& settings, int x, int y)
   const int px = x + g.data_window.x0 - g.display_window.x0;
   const int py = y + g.data_window.y0 - g.display_window.y0;
   const float z = g.depth.at(0, x, y);
-  const Vec3d p = g.camera.unproject(px + 0.5, py + 0.5, z);
+  const Imath::V3d p = g.camera.unproject(px + 0.5, py + 0.5, z);
   normal_ = {g.normal.at(0, x, y), g.normal.at(1, x, y), g.normal.at(2, x, y)};
   const float off = static_cast<float>(settings.start_offset) * z;
   origin_ = {static_cast<float>(p.x) + normal_.x * off, static_cast<float>(p.y) + normal_.y * off,
@@ -297,7 +298,7 @@ PixelRays::PixelRays(const GBuffer& g, const GiSettings& settings, int x, int y)
   noise_ = pixel_noise(px, py, g.frame, settings.seed);
 }
 
-Vec3f PixelRays::direction(int k, float* jitter) const {
+Imath::V3f PixelRays::direction(int k, float* jitter) const {
   float u1, u2;
   ray_sample(noise_, k, &u1, &u2, jitter);
   return cosine_hemisphere(normal_, u1, u2);
@@ -328,7 +329,7 @@ RayHits march_screen_space(const GBuffer& g, const GiSettings& settings, const M
       std::int32_t* out = &hits.hit[p * rays];
       float env[3] = {0, 0, 0}, cube[kCubeFaces] = {0, 0, 0, 0, 0, 0};
       int missed = 0;
-      tracer.trace_pixel(x, y, [&](int k, int hit, const Vec3f& d) {
+      tracer.trace_pixel(x, y, [&](int k, int hit, const Imath::V3f& d) {
         out[k] = hit;
         if (hit >= 0) return;
         ++missed;

@@ -50,18 +50,18 @@ int march_segment(const DepthMesh& mesh, const ScreenSegment& s, int max_steps, 
 class PixelRays {
  public:
   PixelRays(const GBuffer& g, const GiSettings& settings, int x, int y);
-  const Vec3f& origin() const { return origin_; }
+  const Imath::V3f& origin() const { return origin_; }
   // Ray k's unit direction; its march jitter in [0, 1) in *jitter.
-  Vec3f direction(int k, float* jitter) const;
+  Imath::V3f direction(int k, float* jitter) const;
 
  private:
-  Vec3f origin_, normal_;
+  Imath::V3f origin_, normal_;
   PixelNoise noise_;
 };
 
 // A hit on pixel `hit` (>= 0, data window) of a ray from camera-space `origin`, marked when the
 // ray meets it from behind (surface_model.h).
-std::int32_t mark_hit(const GBuffer& g, std::int32_t hit, const Vec3f& origin);
+std::int32_t mark_hit(const GBuffer& g, std::int32_t hit, const Imath::V3f& origin);
 
 // Where each ray of each pixel ended, kept so that further bounces re-gather without
 // re-marching: the hit pixel's index (y * width + x, data window; kSeenFromBehind marks a hit from

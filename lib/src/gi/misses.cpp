@@ -10,7 +10,7 @@
 namespace ssgi::detail {
 namespace {
 
-Vec3f normalized(double x, double y, double z) {
+Imath::V3f normalized(double x, double y, double z) {
   const double l = std::sqrt(x * x + y * y + z * z);
   if (!(l > 0)) return {0, 0, 0};
   return {static_cast<float>(x / l), static_cast<float>(y / l), static_cast<float>(z / l)};
@@ -72,31 +72,30 @@ MissModel::MissModel(const GBuffer& g, MissMode mode, const Environment& env)
   up_ = {0, 1, 0};
   up_name_ = "+y (camera)";
   if (rotate_) {
-    const Mat4d& m = cam.world_to_camera;
-    Vec3f world[3];
-    for (int i = 0; i < 3; ++i) world[i] = normalized(m.m[i][0], m.m[i][1], m.m[i][2]);
-    const Mat4d inv = m.inverse();
+    const Imath::M44d& m = cam.world_to_camera;
+    Imath::V3f world[3];
+    for (int i = 0; i < 3; ++i) world[i] = normalized(m[i][0], m[i][1], m[i][2]);
+    const Imath::M44d inv = inverse_checked(m);
     for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j) camera_to_world_[i][j] = static_cast<float>(inv.m[i][j]);
+      for (int j = 0; j < 3; ++j) camera_to_world_[i][j] = static_cast<float>(inv[i][j]);
     int up = -1;
     for (int pass = 0; pass < 2 && up < 0; ++pass)
       for (int i = 0; i < 3; ++i) {
         if (pass == 0 && std::fabs(world[i].x) > 0.3f) continue;
         if (up < 0 || std::fabs(world[i].y) > std::fabs(world[up].y)) up = i;
       }
-    const Vec3f& a = world[up];
+    const Imath::V3f& a = world[up];
     const bool flip = std::fabs(a.y) > 1e-3f ? a.y < 0 : a.z > 0;
-    up_ = flip ? Vec3f{-a.x, -a.y, -a.z} : a;
+    up_ = flip ? -a : a;
     up_name_ = std::string(flip ? "-" : "+") + "XYZ"[up] + " (world)";
   }
   // The cube's axes: the horizontal right and forward of the view (the view's forward, or
   // looking straight down or up its up, with the up component taken out), and the world's up.
-  Vec3f forward{-up_.z * up_.x, -up_.z * up_.y, 1.0f - up_.z * up_.z};
-  if (forward.x * forward.x + forward.y * forward.y + forward.z * forward.z < 1e-6f)
+  Imath::V3f forward{-up_.z * up_.x, -up_.z * up_.y, 1.0f - up_.z * up_.z};
+  if (forward.dot(forward) < 1e-6f)
     forward = {-up_.y * up_.x, 1.0f - up_.y * up_.y, -up_.y * up_.z};
   forward = normalized(forward.x, forward.y, forward.z);
-  const Vec3f right{up_.y * forward.z - up_.z * forward.y, up_.z * forward.x - up_.x * forward.z,
-                    up_.x * forward.y - up_.y * forward.x};
+  const Imath::V3f right = up_.cross(forward);
   axis_[0] = right, axis_[1] = up_, axis_[2] = forward;
 
   // Over a lattice of the data window: the sky's share by elevation (the pixels showing no
@@ -110,7 +109,7 @@ MissModel::MissModel(const GBuffer& g, MissMode mode, const Environment& env)
   double facing[kCubeFaces] = {}, border_total = 0;
   for (int y = stride / 2; y < h; y += stride)
     for (int x = stride / 2; x < w; x += stride) {
-      const Vec3d v = cam.view_dir(offset_x_ + x + 0.5, offset_y_ + y + 0.5);
+      const Imath::V3d v = cam.view_dir(offset_x_ + x + 0.5, offset_y_ + y + 0.5);
       const float e = static_cast<float>(v.x * up_.x + v.y * up_.y + v.z * up_.z);
       const int k =
           std::clamp(static_cast<int>((e + 1.0f) * 0.5f * kElevationBins), 0, kElevationBins - 1);
@@ -192,12 +191,9 @@ double MissModel::border_weight(double x, double y) const {
   return std::exp(-std::max(d, 0.0) * falloff);
 }
 
-std::array<float, 3> MissModel::environment(const Vec3f& d) const {
+std::array<float, 3> MissModel::environment(const Imath::V3f& d) const {
   if (env_.is_constant() || !rotate_) return env_.radiance(d);
-  const auto& m = camera_to_world_;  // row vectors: world = d * M
-  return env_.radiance({d.x * m[0][0] + d.y * m[1][0] + d.z * m[2][0],
-                        d.x * m[0][1] + d.y * m[1][1] + d.z * m[2][1],
-                        d.x * m[0][2] + d.y * m[1][2] + d.z * m[2][2]});
+  return env_.radiance(d * camera_to_world_);  // row vectors: world = d * M
 }
 
 CubeLight MissModel::cube_light(const TraceGrid& grid, const std::array<float, 4>* light,

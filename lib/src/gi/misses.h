@@ -61,16 +61,16 @@ class MissModel {
 
   // Adds what a miss along camera-space unit direction `d` of weight `w` brings: the
   // environment's light to env[3], the cube's shares to cube[6].
-  void add(const Vec3f& d, float w, float env[3], float cube[kCubeFaces]) const {
+  void add(const Imath::V3f& d, float w, float env[3], float cube[kCubeFaces]) const {
     const float open = 1.0f - sky_share(d);  // what is not sky
     // Below the horizon under an open sky the ground is nearer than the walls the more steeply
     // the ray heads down: it takes that much of the walls' part.
-    const float e = d.x * up_.x + d.y * up_.y + d.z * up_.z;  // sin(elevation)
+    const float e = d.dot(up_);  // sin(elevation)
     const float ground = e < 0 ? ground_ * std::min(-e * kGroundSteepness, 1.0f) : 0.0f;
     // Each cube direction takes its squared component of the ray, as far as it is enclosed.
     float surfaces = 0;
     for (int i = 0; i < 3; ++i) {
-      const float a = d.x * axis_[i].x + d.y * axis_[i].y + d.z * axis_[i].z;
+      const float a = d.dot(axis_[i]);
       const int f = 2 * i + (a >= 0 ? 0 : 1);
       const float share = open * a * a * enclosed_[f] * (i == 1 ? 1.0f : 1.0f - ground);
       cube[f] += w * share;
@@ -90,14 +90,14 @@ class MissModel {
   // The share of the sky along camera-space unit direction `d`: the front's share by
   // elevation, turning into the one behind the camera as `d` turns away from the view (in
   // proportion to the cosine of its horizontal angle from straight back, none sideways).
-  float sky_share(const Vec3f& d) const {
-    const float e = d.x * up_.x + d.y * up_.y + d.z * up_.z;  // sin(elevation)
+  float sky_share(const Imath::V3f& d) const {
+    const float e = d.dot(up_);  // sin(elevation)
     const float f = std::min(std::max((e + 1.0f) * 0.5f * kElevationBins - 0.5f, 0.0f),
                              static_cast<float>(kElevationBins - 1));
     const int k = std::min(static_cast<int>(f), kElevationBins - 2);
     const float t = f - static_cast<float>(k);
     const float front = sky_[k] + t * (sky_[k + 1] - sky_[k]);
-    const float ahead = d.x * axis_[2].x + d.y * axis_[2].y + d.z * axis_[2].z;
+    const float ahead = d.dot(axis_[2]);
     if (!(ahead < 0) || !(behind_open_ > 0)) return front;
     const float behind = sky_behind_[k] + t * (sky_behind_[k + 1] - sky_behind_[k]);
     const float across = std::sqrt(std::max(1.0f - e * e, 0.0f));  // the horizontal length
@@ -106,7 +106,7 @@ class MissModel {
   }
 
   // The environment's light along camera-space direction `d` (world-space maps rotated).
-  std::array<float, 3> environment(const Vec3f& d) const;
+  std::array<float, 3> environment(const Imath::V3f& d) const;
 
   // The cube's colours for one bounce: light[stride * s] is trace sample s's light (what it
   // reflects plus albedo x its indirect light; RGB and one unused float), over the samples with
@@ -135,10 +135,10 @@ class MissModel {
   double offset_x_, offset_y_;    // the data window's origin in it
   // The cube's axes in camera space: the view's horizontal right, the world's up, the view's
   // horizontal forward; face 2 i is +axis i, 2 i + 1 its opposite (so 5 is behind the camera).
-  Vec3f axis_[3];
+  Imath::V3f axis_[3];
   // Per face, how far a miss heading that way meets a surface rather than the environment.
   std::array<float, kCubeFaces> enclosed_{};
-  Vec3f up_;  // the world's up axis in camera space
+  Imath::V3f up_;  // the world's up axis in camera space
   std::string up_name_;
   std::array<float, kElevationBins> sky_{};
   // Behind the camera: the most open side's share by elevation, and how far it holds there
@@ -151,7 +151,7 @@ class MissModel {
   std::array<int, kElevationBins> seen_{};  // trace samples per bin (for describe)
   MissMode mode_;
   bool rotate_ = false;
-  float camera_to_world_[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  Imath::M33f camera_to_world_;  // identity without a world transform
 };
 
 }  // namespace ssgi::detail

@@ -14,29 +14,23 @@
 namespace ssgi::detail {
 namespace {
 
-// Camera space of one frame to camera space of another, in floats (p' = R p + t).
+// Camera space of one frame to camera space of another, in floats (row vectors:
+// p' = p R + t).
 struct Rigid {
-  float r[3][3], t[3];
-  Vec3f point(const Vec3f& p) const {
-    return {r[0][0] * p.x + r[0][1] * p.y + r[0][2] * p.z + t[0],
-            r[1][0] * p.x + r[1][1] * p.y + r[1][2] * p.z + t[1],
-            r[2][0] * p.x + r[2][1] * p.y + r[2][2] * p.z + t[2]};
-  }
-  Vec3f direction(const Vec3f& d) const {
-    return {r[0][0] * d.x + r[0][1] * d.y + r[0][2] * d.z,
-            r[1][0] * d.x + r[1][1] * d.y + r[1][2] * d.z,
-            r[2][0] * d.x + r[2][1] * d.y + r[2][2] * d.z};
-  }
+  Imath::M33f rotation;
+  Imath::V3f translation{0, 0, 0};
+  Imath::V3f point(const Imath::V3f& p) const { return p * rotation + translation; }
+  Imath::V3f direction(const Imath::V3f& d) const { return d * rotation; }
 };
 
 // From camera `from`'s space to camera `to`'s (row-vector matrices: from's camera-to-world,
 // then to's world-to-camera).
 Rigid between(const Camera& from, const Camera& to) {
-  const Mat4d m = from.world_to_camera.inverse() * to.world_to_camera;
+  const Imath::M44d m = inverse_checked(from.world_to_camera) * to.world_to_camera;
   Rigid out;
   for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) out.r[i][j] = static_cast<float>(m.m[j][i]);
-    out.t[i] = static_cast<float>(m.m[3][i]);
+    for (int j = 0; j < 3; ++j) out.rotation[i][j] = static_cast<float>(m[i][j]);
+    out.translation[i] = static_cast<float>(m[3][i]);
   }
   return out;
 }
@@ -48,9 +42,9 @@ bool same_camera(const Camera& a, const Camera& b) {
   for (int i = 0; i < 4; ++i)
     for (int j = 0; j < 4; ++j) {
       largest = std::max(
-          {largest, std::fabs(a.world_to_camera.m[i][j]), std::fabs(b.world_to_camera.m[i][j])});
+          {largest, std::fabs(a.world_to_camera[i][j]), std::fabs(b.world_to_camera[i][j])});
       difference =
-          std::max(difference, std::fabs(a.world_to_camera.m[i][j] - b.world_to_camera.m[i][j]));
+          std::max(difference, std::fabs(a.world_to_camera[i][j] - b.world_to_camera[i][j]));
     }
   return difference <= 1e-6 * largest;
 }
@@ -89,7 +83,7 @@ struct View {
   }
 
   // The camera-space point of trace sample s's vertex.
-  Vec3f vertex(std::int32_t s) const {
+  Imath::V3f vertex(std::int32_t s) const {
     const TraceGrid& g = trace->grid;
     const float z = g.depth.plane(0)[s];
     const float sx = static_cast<float>(s % g.width) + 0.5f;
@@ -106,7 +100,7 @@ struct Neighbour {
 // Where ray (o, d) (camera space, o inside the view) leaves the view of trace grid `g` (its
 // pyramid of sight beyond kNearFraction x `scale`): the infinite float when it never does (its
 // vanishing point is in view).
-float leaves_view(const TraceGrid& g, const Vec3f& o, const Vec3f& d, float scale) {
+float leaves_view(const TraceGrid& g, const Imath::V3f& o, const Imath::V3f& d, float scale) {
   float t = std::numeric_limits<float>::infinity();
   // Each side as a x p + b >= 0 inside the view.
   auto side = [&](float ax, float ay, float az, float b) {
@@ -126,11 +120,11 @@ float leaves_view(const TraceGrid& g, const Vec3f& o, const Vec3f& d, float scal
 // view (leaves_view), first passes behind what the frame shows by more than the slab: the
 // parameter of the last free sample before that point, of `steps` jittered samples evenly spaced
 // on the screen (so the frame's own tracer's rule), or t_exit when it never does.
-float first_hidden(const View& own, const Vec3f& o, const Vec3f& d, float t_exit, float scale,
-                   int steps, float jitter) {
+float first_hidden(const View& own, const Imath::V3f& o, const Imath::V3f& d, float t_exit,
+                   float scale, int steps, float jitter) {
   const TraceGrid& g = own.trace->grid;
   const float t1 = std::isinf(t_exit) ? kFarFactor * scale : t_exit;
-  const Vec3f b{o.x + t1 * d.x, o.y + t1 * d.y, o.z + t1 * d.z};
+  const Imath::V3f b = o + t1 * d;
   if (!(o.z > 0) || !(b.z > 0)) return t_exit;
   const float h0 = 1.0f / o.z, h1 = 1.0f / b.z;
   const float sx0 = g.cx + g.fx * o.x / o.z, sy0 = g.cy - g.fy * o.y / o.z;
@@ -155,8 +149,8 @@ float first_hidden(const View& own, const Vec3f& o, const Vec3f& d, float t_exit
 // Marches camera-space ray (o, d) of neighbour `n` from parameter t_from on (its origin at depth
 // `scale` in the frame it started from) through n's mesh: the hit trace sample, marked
 // kSeenFromBehind, or -1.
-std::int32_t march_in(const View& n, const Vec3f& o, const Vec3f& d, float t_from, float scale,
-                      float jitter, const GiSettings& settings) {
+std::int32_t march_in(const View& n, const Imath::V3f& o, const Imath::V3f& d, float t_from,
+                      float scale, float jitter, const GiSettings& settings) {
   const TraceGrid& g = n.trace->grid;
   const float near = kNearFraction * scale;
   float t0 = t_from;
@@ -169,8 +163,8 @@ std::int32_t march_in(const View& n, const Vec3f& o, const Vec3f& d, float t_fro
   }
   if (d.z < 0) t1 = std::min(t1, (o.z - near) / -d.z);
   if (!(t1 > t0)) return -1;
-  const Vec3f a{o.x + t0 * d.x, o.y + t0 * d.y, o.z + t0 * d.z};
-  const Vec3f b{o.x + t1 * d.x, o.y + t1 * d.y, o.z + t1 * d.z};
+  const Imath::V3f a = o + t0 * d;
+  const Imath::V3f b = o + t1 * d;
   const float sx0 = g.cx + g.fx * a.x / a.z, sy0 = g.cy - g.fy * a.y / a.z;
   const float sx1 = g.cx + g.fx * b.x / b.z, sy1 = g.cy - g.fy * b.y / b.z;
   ScreenSegment seg{sx0, sy0, sx1 - sx0, sy1 - sy0, 1.0f / a.z, 1.0f / b.z, 0.0f, 1.0f};
@@ -182,7 +176,7 @@ std::int32_t march_in(const View& n, const Vec3f& o, const Vec3f& d, float t_fro
   const int self_y = origin_seen ? static_cast<int>(std::floor(sy0)) : -1;
   const int hit = march_segment(n.mesh, seg, settings.max_steps, jitter, self_x, self_y);
   if (hit < 0) return -1;
-  const Vec3f p = n.vertex(hit);
+  const Imath::V3f p = n.vertex(hit);
   const float in_front = (o.x - p.x) * g.normal.plane(0)[hit] +
                          (o.y - p.y) * g.normal.plane(1)[hit] +
                          (o.z - p.z) * g.normal.plane(2)[hit];
@@ -191,7 +185,7 @@ std::int32_t march_in(const View& n, const Vec3f& o, const Vec3f& d, float t_fro
 
 // Whether the centre frame sees past camera-space point `x` (its own space): x projects onto its
 // grid in front of the surface it shows there by more than the slab, or onto its background.
-bool seen_past(const View& center, const Vec3f& x) {
+bool seen_past(const View& center, const Imath::V3f& x) {
   const TraceGrid& g = center.trace->grid;
   if (!(x.z > 0)) return false;
   const float sx = g.cx + g.fx * x.x / x.z, sy = g.cy - g.fy * x.y / x.z;
@@ -298,7 +292,7 @@ bool continue_rays(const std::vector<const FrameTrace*>& frames,
       const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
       const std::uint32_t first = self.missed.begin[s], end = self.missed.begin[s + 1];
       if (first == end) continue;
-      const Vec3f o = self.missed.origin[s];
+      const Imath::V3f o = self.missed.origin[s];
       float sum[3] = {0, 0, 0}, env_found[3] = {0, 0, 0}, cube_found[kCubeFaces] = {};
       float miss_found = 0;
       for (std::uint32_t k = first; k < end; ++k) {
@@ -313,18 +307,17 @@ bool continue_rays(const std::vector<const FrameTrace*>& frames,
         ++row_rays;
         bool refused = false;
         for (const Neighbour& n : neighbours) {
-          const Vec3f on = n.from_center.point(o);
+          const Imath::V3f on = n.from_center.point(o);
           const std::int32_t hit = march_in(*n.view, on, n.from_center.direction(ray.direction),
                                             t_from, o.z, jitter, settings);
           if (hit < 0) continue;
           const std::int32_t h = hit_pixel(hit);
           // The ray's point nearest the hit vertex: where the hit is, which the centre must
           // not see as empty space.
-          const Vec3f x = n.view->vertex(h);
-          const Vec3f dn = n.from_center.direction(ray.direction);
-          const float along = (x.x - on.x) * dn.x + (x.y - on.y) * dn.y + (x.z - on.z) * dn.z;
-          if (seen_past(own, n.to_center.point({on.x + along * dn.x, on.y + along * dn.y,
-                                                on.z + along * dn.z}))) {
+          const Imath::V3f x = n.view->vertex(h);
+          const Imath::V3f dn = n.from_center.direction(ray.direction);
+          const float along = (x - on).dot(dn);
+          if (seen_past(own, n.to_center.point(on + along * dn))) {
             refused = true;
             continue;
           }

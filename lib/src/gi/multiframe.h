@@ -34,7 +34,7 @@ namespace ssgi::detail {
 // One missed ray of a trace sample: a camera-space unit direction and its share of the
 // sample's cosine-weighted hemisphere.
 struct MissedRay {
-  Vec3f direction;
+  Imath::V3f direction;
   float weight;
 };
 using PixelMisses = std::vector<MissedRay>;
@@ -43,7 +43,7 @@ using PixelMisses = std::vector<MissedRay>;
 struct MissedRays {
   std::vector<std::uint32_t> begin;  // per trace sample, its first ray; one more at the end
   std::vector<MissedRay> rays;
-  std::vector<Vec3f> origin;  // per trace sample, where its rays start (camera space)
+  std::vector<Imath::V3f> origin;  // per trace sample, where its rays start (camera space)
 };
 
 // The continuation's numbers for one frame (-v).

@@ -22,17 +22,9 @@ constexpr int kContinuedPerSlice = 2;
 
 constexpr float kPi = kSlicePi;
 
-struct V3 {
-  float x, y, z;
-};
-V3 operator+(V3 a, V3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-V3 operator-(V3 a, V3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-V3 operator*(float s, V3 a) { return {s * a.x, s * a.y, s * a.z}; }
-float dot(V3 a, V3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-V3 cross(V3 a, V3 b) {
-  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-}
-V3 normalized(V3 a) { return (1.0f / std::sqrt(dot(a, a))) * a; }
+// Times 1 / |a|: one division where Imath's normalized() does three, by its tiny-vector-safe
+// length (with other roundings).
+Imath::V3f normalized(const Imath::V3f& a) { return (1.0f / std::sqrt(a.dot(a))) * a; }
 
 // An angle in the slice, from the view vector towards T, with its sine and cosine.
 struct Angle {
@@ -206,15 +198,18 @@ struct SliceTracer {
         inv_fy(1.0f / gr.fy) {}
 
   // The camera-space direction through trace-grid coordinates (sx, sy), at z = 1.
-  V3 ray(float sx, float sy) const { return {(sx - cx) * inv_fx, (cy - sy) * inv_fy, 1.0f}; }
+  Imath::V3f ray(float sx, float sy) const {
+    return {(sx - cx) * inv_fx, (cy - sy) * inv_fy, 1.0f};
+  }
 
   // What the missed sectors of a slice bring (misses.h): the half-disc cut into kMissBins
   // equal angles, each bin's missed sectors (those whose coordinate falls in it) sent along the
   // bin's middle direction. The angles' sines and cosines by rotation from the lowest's, not by
   // libm.
   void add_slice_misses(std::uint32_t missed, const SliceMeasure& measure, const Angle& lowest,
-                        float h_lo, float to_sector, float u_rot, const V3& view, const V3& t,
-                        float sector_weight, float env_light[3], float cube[kCubeFaces]) const {
+                        float h_lo, float to_sector, float u_rot, const Imath::V3f& view,
+                        const Imath::V3f& t, float sector_weight, float env_light[3],
+                        float cube[kCubeFaces]) const {
     // The half-disc spans pi from its lowest angle: the bins' steps are constants.
     constexpr int kMissBins = 8;
     constexpr float step = kPi / kMissBins;
@@ -241,8 +236,8 @@ struct SliceTracer {
       const int count = sector_count(missed & upto & ~done);
       done |= upto;
       if (count == 0) continue;
-      const V3 d = normalized(cm * view + sm * t);
-      misses.add({d.x, d.y, d.z}, sector_weight * static_cast<float>(count), env_light, cube);
+      const Imath::V3f d = normalized(cm * view + sm * t);
+      misses.add(d, sector_weight * static_cast<float>(count), env_light, cube);
     }
   }
 
@@ -252,8 +247,9 @@ struct SliceTracer {
   // estimate of what the run's rays would find. The ray's angle inverts the slice's measure by
   // interpolation in a table of it over the half-disc.
   void record_slice_misses(std::uint32_t missed, const SliceMeasure& measure, const Angle& lowest,
-                           float h_lo, float to_sector, float u_rot, const V3& view, const V3& t,
-                           float sector_weight, std::uint64_t key, PixelMisses* record) const {
+                           float h_lo, float to_sector, float u_rot, const Imath::V3f& view,
+                           const Imath::V3f& t, float sector_weight, std::uint64_t key,
+                           PixelMisses* record) const {
     // A coarse table: the measure is smooth, and the tracer runs this for every slice with a
     // miss (64 steps took a tenth of the final preset's tracing at 1080p, perf).
     constexpr int kSteps = 16;
@@ -290,8 +286,8 @@ struct SliceTracer {
       const float d2 = delta * delta;
       const float cd = 1.0f - 0.5f * d2 + d2 * d2 / 24.0f, sd = delta * (1.0f - d2 / 6.0f);
       const float cm = cosines[i] * cd - sines[i] * sd, sm = sines[i] * cd + cosines[i] * sd;
-      const V3 d = normalized(cm * view + sm * t);
-      record->push_back({{d.x, d.y, d.z}, sector_weight * static_cast<float>(size)});
+      const Imath::V3f d = normalized(cm * view + sm * t);
+      record->push_back({d, sector_weight * static_cast<float>(size)});
     }
   }
 
@@ -299,25 +295,25 @@ struct SliceTracer {
   // its missed rays (record_slice_misses) and into *ray_origin where they start.
   void trace(int p, std::vector<std::int32_t>* pixels, std::vector<float>* weights, float* miss,
              float env_light[3], float cube[kCubeFaces], PixelMisses* record,
-             Vec3f* ray_origin) const {
+             Imath::V3f* ray_origin) const {
     const int x = p % w, y = p / w;
     const float z0 = g.depth.plane(0)[p];
-    const V3 n{g.normal.plane(0)[p], g.normal.plane(1)[p], g.normal.plane(2)[p]};
+    const Imath::V3f n{g.normal.plane(0)[p], g.normal.plane(1)[p], g.normal.plane(2)[p]};
     const float offset = static_cast<float>(settings.start_offset) * z0;
     const float to_grid = 1.0f / static_cast<float>(grid.scale);
-    const V3 origin = z0 * ray((x + 0.5f) * to_grid, (y + 0.5f) * to_grid) + offset * n;
-    const V3 view = normalized(-1.0f * origin);
-    if (ray_origin) *ray_origin = {origin.x, origin.y, origin.z};
+    const Imath::V3f origin = z0 * ray((x + 0.5f) * to_grid, (y + 0.5f) * to_grid) + offset * n;
+    const Imath::V3f view = normalized(-1.0f * origin);
+    if (ray_origin) *ray_origin = origin;
     // A point floats cannot hold (a depth near FLT_MAX; found by fuzzing) brings no light, rather
     // than NaN angles indexing the azimuth table.
     if (!std::isfinite(view.x + view.y + view.z)) return;
     // Azimuths around the view vector are measured from the normal's own (basis_x), so that
     // the slices can be drawn with the density of their weight (SliceAzimuths).
-    const float nv_pixel = std::clamp(dot(n, view), 0.0f, 1.0f);
-    V3 across = n - nv_pixel * view;
-    if (!(dot(across, across) > 1e-12f)) across = V3{1, 0, 0} - view.x * view;
-    const V3 basis_x = normalized(across);
-    const V3 basis_y = cross(view, basis_x);
+    const float nv_pixel = std::clamp(n.dot(view), 0.0f, 1.0f);
+    Imath::V3f across = n - nv_pixel * view;
+    if (!(across.dot(across) > 1e-12f)) across = Imath::V3f(1, 0, 0) - view.x * view;
+    const Imath::V3f basis_x = normalized(across);
+    const Imath::V3f basis_y = view.cross(basis_x);
     const SliceAzimuths& azimuths = slice_azimuths();
     // Where the origin is on the screen: every sample lies on a line through it.
     const float qx = cx + fx * origin.x / origin.z, qy = cy - fy * origin.y / origin.z;
@@ -344,8 +340,8 @@ struct SliceTracer {
       float dalpha_dxi;
       const float xi = (static_cast<float>(i) + u_phi) / static_cast<float>(slices);
       const float psi = azimuths.alpha(nv_pixel, xi, &dalpha_dxi);
-      const V3 t = std::cos(psi) * basis_x + std::sin(psi) * basis_y;
-      const V3 plane_normal = cross(view, t);
+      const Imath::V3f t = std::cos(psi) * basis_x + std::sin(psi) * basis_y;
+      const Imath::V3f plane_normal = view.cross(t);
       // The slice's screen line: where the projection of origin + e t moves as e grows.
       float dx = fx * (t.x * origin.z - origin.x * t.z);
       float dy = -fy * (t.y * origin.z - origin.y * t.z);
@@ -354,8 +350,8 @@ struct SliceTracer {
       dx /= screen_length;
       dy /= screen_length;
       // The normal in the slice: its angle gamma from the view vector and its length.
-      const V3 np = n - dot(n, plane_normal) * plane_normal;
-      const float nv = std::max(dot(np, view), 1e-6f), nt = dot(np, t);
+      const Imath::V3f np = n - n.dot(plane_normal) * plane_normal;
+      const float nv = std::max(np.dot(view), 1e-6f), nt = np.dot(t);
       const float np_length = std::sqrt(nv * nv + nt * nt);
       if (!(np_length > 0)) continue;
       const float cg = nv / np_length, sg = nt / np_length;
@@ -450,7 +446,7 @@ WeightedHits trace_slices(const GBuffer& g, const TraceGrid& grid, const GiSetti
   std::vector<std::vector<std::uint32_t>> row_counts(grid.height);
   std::vector<PixelMisses> row_missed(missed ? grid.height : 0);
   std::vector<std::vector<std::uint32_t>> row_missed_counts(row_missed.size());
-  if (missed) missed->origin.assign(grid.origin.size(), Vec3f{0, 0, 0});
+  if (missed) missed->origin.assign(grid.origin.size(), Imath::V3f{0, 0, 0});
   parallel_for_rows(grid.height, [&](int by) {
     PixelMisses pixel_missed;
     if (missed) row_missed_counts[by].assign(grid.width, 0);

@@ -63,21 +63,16 @@ constexpr int kSharedLattice = 64;
 constexpr double kSharedDepthTolerance = 0.02;
 constexpr int kMinShared = 16;
 
-struct Vec2 {
-  double x = 0, y = 0;
-};
-
-Vec3d operator-(const Vec3d& a, const Vec3d& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-double dot(const Vec3d& a, const Vec3d& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-double length(const Vec2& v) { return std::hypot(v.x, v.y); }
+// hypot, not Imath's length(): no overflow or underflow for any finite vector.
+double length(const Imath::V2d& v) { return std::hypot(v.x, v.y); }
 
 // The unit vector along v, or 0 when v has no usable direction.
-Vec3d normalized(const Vec3d& v) {
-  const double len = std::sqrt(dot(v, v));
-  if (!(len > 0) || !std::isfinite(len)) return {};
-  return {v.x / len, v.y / len, v.z / len};
+Imath::V3d normalized(const Imath::V3d& v) {
+  const double len = std::sqrt(v.dot(v));
+  if (!(len > 0) || !std::isfinite(len)) return Imath::V3d(0);
+  return v / len;
 }
-bool is_zero(const Vec3d& v) { return v.x == 0 && v.y == 0 && v.z == 0; }
+bool is_zero(const Imath::V3d& v) { return v.x == 0 && v.y == 0 && v.z == 0; }
 
 bool has_surface(float z) { return std::isfinite(z) && z > 0; }
 float finite_or_zero(float v) { return std::isfinite(v) ? v : 0.0f; }
@@ -86,22 +81,22 @@ std::size_t index(const Image& image, int x, int y) {
   return static_cast<std::size_t>(y) * image.width() + x;
 }
 
-Vec3d load_normal(const GBuffer& g, std::size_t i) {
-  if (g.normal.channels() < 3) return {};
+Imath::V3d load_normal(const GBuffer& g, std::size_t i) {
+  if (g.normal.channels() < 3) return Imath::V3d(0);
   return normalized({g.normal.plane(0)[i], g.normal.plane(1)[i], g.normal.plane(2)[i]});
 }
 
 // The camera-space transform from frame a's camera to frame b's for static points. A camera
 // without a world transform (--fov) does not move: then a and b share their camera space.
-Mat4d camera_to_camera(const GBuffer& a, const GBuffer& b) {
-  if (!a.camera.has_world_transform || !b.camera.has_world_transform) return {};
-  return a.camera.world_to_camera.inverse() * b.camera.world_to_camera;
+Imath::M44d camera_to_camera(const GBuffer& a, const GBuffer& b) {
+  if (!a.camera.has_world_transform || !b.camera.has_world_transform) return Imath::M44d();
+  return inverse_checked(a.camera.world_to_camera) * b.camera.world_to_camera;
 }
 
 // One frame on the way from the current frame to the other one.
 struct ChainFrame {
   const GBuffer* g = nullptr;
-  Mat4d from_current;               // current camera space -> this camera space (static)
+  Imath::M44d from_current;         // current camera space -> this camera space (static)
   const Image* forward = nullptr;   // motion to the next frame of the chain, if known
   const Image* backward = nullptr;  // motion to the previous frame of the chain, if known
   double ox = 0, oy = 0;            // display coordinates of the data window's origin
@@ -139,15 +134,15 @@ std::vector<ChainFrame> make_chain(const std::vector<const GBuffer*>& frames, in
 // What a tap of a chain frame must look like to show the reprojected point.
 struct Expectation {
   bool moving = false;
-  Vec3d point;   // where the point is in this frame's camera space if static
-  Vec3d normal;  // its normal there, camera motion compensated (0: unknown)
+  Imath::V3d point{0, 0, 0};   // where the point is in this frame's camera space if static
+  Imath::V3d normal{0, 0, 0};  // its normal there, camera motion compensated (0: unknown)
   // Moving: the allowed |tap depth - point.z|. The vectors give only the 2D motion, so the
   // object may have moved in depth by up to as much as it moved sideways.
   double depth_tolerance = 0;
-  Vec2 last_step;  // moving: the vector that led here, for the consistency test
+  Imath::V2d last_step{0, 0};  // moving: the vector that led here, for the consistency test
 };
 
-Vec2 motion_at(const Image& m, std::size_t i) { return {m.plane(0)[i], m.plane(1)[i]}; }
+Imath::V2d motion_at(const Image& m, std::size_t i) { return {m.plane(0)[i], m.plane(1)[i]}; }
 
 bool accept_tap(const ChainFrame& f, int tx, int ty, const Expectation& e) {
   const GBuffer& g = *f.g;
@@ -155,40 +150,42 @@ bool accept_tap(const ChainFrame& f, int tx, int ty, const Expectation& e) {
   const float z = g.depth.plane(0)[i];
   if (!has_surface(z)) return false;
   if (!e.moving) {
-    const Vec3d p = g.camera.unproject(tx + f.ox + 0.5, ty + f.oy + 0.5, z);
-    const Vec3d n = is_zero(e.normal) ? normalized(e.point) : e.normal;
-    if (!(std::abs(dot(p - e.point, n)) <= kPlaneTolerance * e.point.z)) return false;
+    const Imath::V3d p = g.camera.unproject(tx + f.ox + 0.5, ty + f.oy + 0.5, z);
+    const Imath::V3d n = is_zero(e.normal) ? normalized(e.point) : e.normal;
+    if (!(std::abs((p - e.point).dot(n)) <= kPlaneTolerance * e.point.z)) return false;
   } else {
     if (!(std::abs(z - e.point.z) <= e.depth_tolerance)) return false;
     if (f.backward) {
-      const Vec2 back = motion_at(*f.backward, i);
-      const Vec2 sum{back.x + e.last_step.x, back.y + e.last_step.y};
+      const Imath::V2d back = motion_at(*f.backward, i);
+      const Imath::V2d sum = back + e.last_step;
       if (!(length(sum) <= kConsistencyPx + kConsistencyRelative * length(e.last_step)))
         return false;
     }
   }
-  const Vec3d n_tap = load_normal(g, i);
-  return is_zero(n_tap) || is_zero(e.normal) || dot(n_tap, e.normal) >= kMinNormalCos;
+  const Imath::V3d n_tap = load_normal(g, i);
+  return is_zero(n_tap) || is_zero(e.normal) || n_tap.dot(e.normal) >= kMinNormalCos;
 }
 
 // The current point, static hypothesis, in a chain frame's camera space.
 struct StaticPoint {
-  Vec3d point, normal;
+  Imath::V3d point{0, 0, 0}, normal{0, 0, 0};
   bool in_front = false;
-  Vec2 pixel;  // its projection (display coordinates) when in front
+  Imath::V2d pixel{0, 0};  // its projection (display coordinates) when in front
 };
 
-StaticPoint static_point(const ChainFrame& f, const Vec3d& p, const Vec3d& n) {
+StaticPoint static_point(const ChainFrame& f, const Imath::V3d& p, const Imath::V3d& n) {
   StaticPoint s;
-  s.point = f.from_current.transform_point(p);
-  s.normal = normalized(f.from_current.transform_dir(n));
+  s.point = p * f.from_current;
+  Imath::V3d normal(0);
+  f.from_current.multDirMatrix(n, normal);
+  s.normal = normalized(normal);
   s.in_front = s.point.z > 0 && std::isfinite(s.point.z);
   if (s.in_front) f.g->camera.project(s.point, &s.pixel.x, &s.pixel.y);
   return s;
 }
 
 Expectation moving_expectation(const ChainFrame& f, const StaticPoint& s, double current_z,
-                               const Vec2& q, const Vec2& last_step) {
+                               const Imath::V2d& q, const Imath::V2d& last_step) {
   Expectation e;
   e.moving = true;
   e.normal = s.normal;
@@ -205,7 +202,7 @@ Expectation moving_expectation(const ChainFrame& f, const StaticPoint& s, double
 }
 
 // The tap nearest to display position q in frame f, false when outside the data window.
-bool nearest_tap(const ChainFrame& f, const Vec2& q, int* tx, int* ty) {
+bool nearest_tap(const ChainFrame& f, const Imath::V2d& q, int* tx, int* ty) {
   const double u = std::floor(q.x - f.ox), v = std::floor(q.y - f.oy);
   if (!(u >= 0 && u < f.g->width() && v >= 0 && v < f.g->height())) return false;
   *tx = static_cast<int>(u);
@@ -215,7 +212,7 @@ bool nearest_tap(const ChainFrame& f, const Vec2& q, int* tx, int* ty) {
 
 // Bilinear lookup of `history` at display position q over the accepted taps. Returns the
 // accepted weight (0 when none) and the normalised value in out[3].
-double fetch(const ChainFrame& f, const Image& history, const Vec2& q, const Expectation& e,
+double fetch(const ChainFrame& f, const Image& history, const Imath::V2d& q, const Expectation& e,
              double out[3]) {
   const double u = q.x - f.ox - 0.5, v = q.y - f.oy - 0.5;
   const int w = f.g->width(), h = f.g->height();
@@ -252,9 +249,9 @@ bool reproject_pixel(const std::vector<ChainFrame>& chain, const Image& history,
   const std::size_t i = index(g.depth, x, y);
   const float z = g.depth.plane(0)[i];
   if (!has_surface(z)) return false;
-  const Vec2 q0{x + current.ox + 0.5, y + current.oy + 0.5};
-  const Vec3d p = g.camera.unproject(q0.x, q0.y, z);
-  const Vec3d n = load_normal(g, i);
+  const Imath::V2d q0{x + current.ox + 0.5, y + current.oy + 0.5};
+  const Imath::V3d p = g.camera.unproject(q0.x, q0.y, z);
+  const Imath::V3d n = load_normal(g, i);
 
   const ChainFrame& other = chain.back();
   const StaticPoint s = static_point(other, p, n);
@@ -262,7 +259,7 @@ bool reproject_pixel(const std::vector<ChainFrame>& chain, const Image& history,
   // Moving when the first step's vector (exact: it is this pixel's own) disagrees with the
   // cameras' prediction for a static point.
   bool moving = false;
-  Vec2 step;
+  Imath::V2d step(0, 0);
   const bool vectors =
       chain.size() > 1 && std::all_of(chain.begin(), chain.end() - 1,
                                       [](const ChainFrame& c) { return c.forward != nullptr; });
@@ -270,8 +267,7 @@ bool reproject_pixel(const std::vector<ChainFrame>& chain, const Image& history,
     step = motion_at(*current.forward, i);
     if (std::isfinite(step.x) && std::isfinite(step.y)) {
       const StaticPoint s1 = chain.size() == 2 ? s : static_point(chain[1], p, n);
-      moving = !s1.in_front || length({q0.x + step.x - s1.pixel.x, q0.y + step.y - s1.pixel.y}) >
-                                   kMovingThresholdPx;
+      moving = !s1.in_front || length(q0 + step - s1.pixel) > kMovingThresholdPx;
     }
   }
 
@@ -283,7 +279,7 @@ bool reproject_pixel(const std::vector<ChainFrame>& chain, const Image& history,
     return fetch(other, history, s.pixel, e, out) > 0;
   }
   // Along the vectors, checking at each frame in between that the point is still in view.
-  Vec2 q{q0.x + step.x, q0.y + step.y};
+  Imath::V2d q = q0 + step;
   for (std::size_t k = 1; k + 1 < chain.size(); ++k) {
     const ChainFrame& f = chain[k];
     int tx, ty;
@@ -291,7 +287,7 @@ bool reproject_pixel(const std::vector<ChainFrame>& chain, const Image& history,
     if (!accept_tap(f, tx, ty, moving_expectation(f, static_point(f, p, n), z, q, step)))
       return false;
     step = motion_at(*f.forward, index(f.g->depth, tx, ty));
-    q = {q.x + step.x, q.y + step.y};
+    q = q + step;
     if (!std::isfinite(q.x) || !std::isfinite(q.y)) return false;
   }
   return fetch(other, history, q, moving_expectation(other, s, z, q, step), out) > 0;
@@ -488,7 +484,7 @@ namespace {
 // adds a's light to *sum_a and b's at the same points to *sum_b; returns how many there were.
 int add_shared_light(const GBuffer& a, const Image& a_light, const GBuffer& b, const Image& b_light,
                      double* sum_a, double* sum_b) {
-  const Mat4d to_b = camera_to_camera(a, b);
+  const Imath::M44d to_b = camera_to_camera(a, b);
   const double ax = a.data_window.x0 - a.display_window.x0,
                ay = a.data_window.y0 - a.display_window.y0,
                bx = b.data_window.x0 - b.display_window.x0,
@@ -501,7 +497,7 @@ int add_shared_light(const GBuffer& a, const Image& a_light, const GBuffer& b, c
     for (int x = stride / 2; x < w; x += stride) {
       const float z = a.depth.at(0, x, y);
       if (!has_surface(z)) continue;
-      const Vec3d p = to_b.transform_point(a.camera.unproject(x + ax + 0.5, y + ay + 0.5, z));
+      const Imath::V3d p = a.camera.unproject(x + ax + 0.5, y + ay + 0.5, z) * to_b;
       if (!(p.z > 0)) continue;
       double px, py;
       b.camera.project(p, &px, &py);

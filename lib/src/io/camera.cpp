@@ -18,8 +18,8 @@ constexpr double kPi = 3.14159265358979323846;
 double rad_to_deg(double r) { return r * (180.0 / kPi); }
 double deg_to_rad(double d) { return d * (kPi / 180.0); }
 
-bool all_finite(const Mat4d& a) {
-  for (const auto& row : a.m)
+bool all_finite(const Imath::M44d& a) {
+  for (const auto& row : a.x)
     for (double v : row)
       if (!std::isfinite(v)) return false;
   return true;
@@ -27,11 +27,11 @@ bool all_finite(const Mat4d& a) {
 
 // Scales the camera-space axes by s = (sx, sy, sz), each +-1: world_to_camera * S, and the
 // camera-to-NDC matrix S^-1 * P = S * P, so that the composition world -> NDC is unchanged.
-void flip_camera_axes(const double s[3], Mat4d* world_to_camera, Mat4d* camera_to_ndc) {
+void flip_camera_axes(const double s[3], Imath::M44d* world_to_camera, Imath::M44d* camera_to_ndc) {
   for (int r = 0; r < 4; ++r)
-    for (int c = 0; c < 3; ++c) world_to_camera->m[r][c] *= s[c];
+    for (int c = 0; c < 3; ++c) world_to_camera->x[r][c] *= s[c];
   for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 4; ++c) camera_to_ndc->m[r][c] *= s[r];
+    for (int c = 0; c < 4; ++c) camera_to_ndc->x[r][c] *= s[r];
 }
 
 std::string format_number(double v) {
@@ -43,28 +43,17 @@ std::string format_number(double v) {
 
 }  // namespace
 
-Mat4d Mat4d::operator*(const Mat4d& o) const {
-  Mat4d r;
-  for (int i = 0; i < 4; ++i)
-    for (int j = 0; j < 4; ++j) {
-      double s = 0;
-      for (int k = 0; k < 4; ++k) s += m[i][k] * o.m[k][j];
-      r.m[i][j] = s;
-    }
-  return r;
-}
-
-Mat4d Mat4d::inverse() const {
+Imath::M44d inverse_checked(const Imath::M44d& m) {
   // Gauss-Jordan with partial pivoting. The singularity test is relative: |det| against
   // Hadamard's bound (the product of the row lengths), so that it does not depend on the
   // scene's units or on how large the translation is.
   double bound = 1;
-  for (const auto& row : m) {
+  for (const auto& row : m.x) {
     double len2 = 0;
     for (double v : row) len2 += v * v;
     bound *= std::sqrt(len2);
   }
-  if (!all_finite(*this) || !(bound > 0)) throw_input({}, "singular or non-finite 4x4 matrix");
+  if (!all_finite(m) || !(bound > 0)) throw_input({}, "singular or non-finite 4x4 matrix");
 
   double a[4][8];
   for (int i = 0; i < 4; ++i)
@@ -98,24 +87,10 @@ Mat4d Mat4d::inverse() const {
   if (!(relative_det > 1e-12))
     throw_input({},
                 "singular 4x4 matrix (relative determinant " + format_number(relative_det) + ")");
-  Mat4d r;
+  Imath::M44d r;
   for (int i = 0; i < 4; ++i)
-    for (int j = 0; j < 4; ++j) r.m[i][j] = a[i][j + 4];
+    for (int j = 0; j < 4; ++j) r[i][j] = a[i][j + 4];
   return r;
-}
-
-Vec3d Mat4d::transform_point(const Vec3d& p) const {
-  const double x = p.x * m[0][0] + p.y * m[1][0] + p.z * m[2][0] + m[3][0];
-  const double y = p.x * m[0][1] + p.y * m[1][1] + p.z * m[2][1] + m[3][1];
-  const double z = p.x * m[0][2] + p.y * m[1][2] + p.z * m[2][2] + m[3][2];
-  const double w = p.x * m[0][3] + p.y * m[1][3] + p.z * m[2][3] + m[3][3];
-  return {x / w, y / w, z / w};
-}
-
-Vec3d Mat4d::transform_dir(const Vec3d& d) const {
-  return {d.x * m[0][0] + d.y * m[1][0] + d.z * m[2][0],
-          d.x * m[0][1] + d.y * m[1][1] + d.z * m[2][1],
-          d.x * m[0][2] + d.y * m[1][2] + d.z * m[2][2]};
 }
 
 double Camera::hfov_deg(int display_width) const {
@@ -124,19 +99,18 @@ double Camera::hfov_deg(int display_width) const {
   return rad_to_deg(std::atan(cx / fx) + std::atan((display_width - cx) / fx));
 }
 
-void Camera::project(const Vec3d& p, double* px, double* py) const {
+void Camera::project(const Imath::V3d& p, double* px, double* py) const {
   *px = cx + fx * p.x / p.z;
   *py = cy - fy * p.y / p.z;
 }
 
-Vec3d Camera::unproject(double px, double py, double z) const {
+Imath::V3d Camera::unproject(double px, double py, double z) const {
   return {(px - cx) / fx * z, (cy - py) / fy * z, z};
 }
 
-Vec3d Camera::view_dir(double px, double py) const {
-  const Vec3d d{(px - cx) / fx, (cy - py) / fy, 1.0};
-  const double len = std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
-  return {d.x / len, d.y / len, d.z / len};
+Imath::V3d Camera::view_dir(double px, double py) const {
+  const Imath::V3d d((px - cx) / fx, (cy - py) / fy, 1.0);
+  return d / std::sqrt(d.dot(d));
 }
 
 Camera camera_from_fov(double hfov_deg, const Box2i& display_window, double pixel_aspect) {
@@ -157,19 +131,19 @@ Camera camera_from_fov(double hfov_deg, const Box2i& display_window, double pixe
   return c;
 }
 
-Camera camera_from_matrices(const Mat4d& world_to_camera, const Mat4d& world_to_ndc,
+Camera camera_from_matrices(const Imath::M44d& world_to_camera, const Imath::M44d& world_to_ndc,
                             const Box2i& display_window, const std::string& file) {
   if (display_window.empty()) throw_input(file, "empty display window");
   if (!all_finite(world_to_camera)) throw_input(file, "worldToCamera has non-finite entries");
   if (!all_finite(world_to_ndc)) throw_input(file, "worldToNDC has non-finite entries");
-  Mat4d camera_to_world;
+  Imath::M44d camera_to_world;
   try {
-    camera_to_world = world_to_camera.inverse();
+    camera_to_world = inverse_checked(world_to_camera);
   } catch (const Error& e) {
     throw_input(file, std::string("worldToCamera: ") + e.what());
   }
-  Mat4d w2c = world_to_camera;
-  Mat4d p = camera_to_world * world_to_ndc;
+  Imath::M44d w2c = world_to_camera;
+  Imath::M44d p = camera_to_world * world_to_ndc;
 
   // (X, Y, Z, W) = (x, y, z, 1) * P. A pinhole at the camera origin looking along z has
   // W = a * z only, X = P00 x + P20 z, Y = P11 y + P21 z: anything else is a projection this
@@ -178,19 +152,19 @@ Camera camera_from_matrices(const Mat4d& world_to_camera, const Mat4d& world_to_
   // that carry a length are compared against the camera's distance from the world origin,
   // whose size sets how much rounding they pick up.
   constexpr double kTol = 1e-5;
-  const double a = p.m[2][3];
-  const double w_scale = std::max({std::abs(p.m[0][3]), std::abs(p.m[1][3]), std::abs(a)});
-  if (!(std::abs(a) > 1e-9 * std::max(w_scale, std::abs(p.m[3][3]))))
+  const double a = p[2][3];
+  const double w_scale = std::max({std::abs(p[0][3]), std::abs(p[1][3]), std::abs(a)});
+  if (!(std::abs(a) > 1e-9 * std::max(w_scale, std::abs(p[3][3]))))
     throw_input(file,
                 "worldToNDC is not a perspective projection (w does not depend on camera z: "
                 "orthographic or degenerate)");
-  if (std::abs(p.m[0][3]) > kTol * std::abs(a) || std::abs(p.m[1][3]) > kTol * std::abs(a))
+  if (std::abs(p[0][3]) > kTol * std::abs(a) || std::abs(p[1][3]) > kTol * std::abs(a))
     throw_input(file,
                 "worldToNDC is not a pinhole projection along the camera's z axis (w depends on "
                 "camera x or y)");
-  const Vec3d eye{camera_to_world.m[3][0], camera_to_world.m[3][1], camera_to_world.m[3][2]};
-  const double length_scale = 1 + std::sqrt(eye.x * eye.x + eye.y * eye.y + eye.z * eye.z);
-  if (std::abs(p.m[3][3]) > kTol * std::abs(a) * length_scale)
+  const Imath::V3d eye = camera_to_world.translation();
+  const double length_scale = 1 + std::sqrt(eye.dot(eye));
+  if (std::abs(p[3][3]) > kTol * std::abs(a) * length_scale)
     throw_input(file, "worldToNDC's centre of projection is not at the worldToCamera origin");
 
   // Normalise to the library's camera space (x right, y up, +z forward): whatever axis the
@@ -200,24 +174,23 @@ Camera camera_from_matrices(const Mat4d& world_to_camera, const Mat4d& world_to_
   const double flip_z[3] = {1, 1, a < 0 ? -1.0 : 1.0};
   flip_camera_axes(flip_z, &w2c, &p);
   const double w = display_window.width(), h = display_window.height();
-  const double az = p.m[2][3];
-  const double flip_xy[3] = {p.m[0][0] < 0 ? -1.0 : 1.0, p.m[1][1] > 0 ? -1.0 : 1.0, 1};
+  const double az = p[2][3];
+  const double flip_xy[3] = {p[0][0] < 0 ? -1.0 : 1.0, p[1][1] > 0 ? -1.0 : 1.0, 1};
   flip_camera_axes(flip_xy, &w2c, &p);
 
   Camera c;
   // NDC x = (P00 x + P20 z + P30) / (a z) and pixel x = NDC x * W (pixel i's centre is NDC
   // (i + 0.5) / W); likewise for y, whose NDC axis points down.
-  c.fx = w * p.m[0][0] / az;
-  c.fy = -h * p.m[1][1] / az;
-  c.cx = w * p.m[2][0] / az;
-  c.cy = h * p.m[2][1] / az;
+  c.fx = w * p[0][0] / az;
+  c.fy = -h * p[1][1] / az;
+  c.cx = w * p[2][0] / az;
+  c.cy = h * p[2][1] / az;
   if (!(c.fx > 0 && c.fy > 0 && std::isfinite(c.fx) && std::isfinite(c.fy)))
     throw_input(file, "worldToNDC has a zero or non-finite focal length");
-  if (std::abs(p.m[1][0]) > kTol * std::abs(p.m[0][0]) ||
-      std::abs(p.m[0][1]) > kTol * std::abs(p.m[1][1]))
+  if (std::abs(p[1][0]) > kTol * std::abs(p[0][0]) || std::abs(p[0][1]) > kTol * std::abs(p[1][1]))
     throw_input(file, "worldToNDC has skew or image-plane rotation");
-  if (std::abs(p.m[3][0]) > kTol * std::abs(p.m[0][0]) * length_scale ||
-      std::abs(p.m[3][1]) > kTol * std::abs(p.m[1][1]) * length_scale)
+  if (std::abs(p[3][0]) > kTol * std::abs(p[0][0]) * length_scale ||
+      std::abs(p[3][1]) > kTol * std::abs(p[1][1]) * length_scale)
     throw_input(file, "worldToNDC's centre of projection is not at the worldToCamera origin");
   // A principal point on the display window's top-left corner is how a -1..1 screen-space
   // matrix looks when a renderer writes it under the name worldToNDC (3Delight has done so):

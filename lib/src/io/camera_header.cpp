@@ -23,19 +23,12 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-Mat4d diagonal(double x, double y, double z) {
-  Mat4d d;
-  d.m[0][0] = x;
-  d.m[1][1] = y;
-  d.m[2][2] = z;
+Imath::M44d diagonal(double x, double y, double z) {
+  Imath::M44d d;
+  d[0][0] = x;
+  d[1][1] = y;
+  d[2][2] = z;
   return d;
-}
-
-Mat4d transposed(const Mat4d& a) {
-  Mat4d t;
-  for (int i = 0; i < 4; ++i)
-    for (int j = 0; j < 4; ++j) t.m[i][j] = a.m[j][i];
-  return t;
 }
 
 // Exact-case lookup: OIIO keeps EXR attribute names as written, except for a few it renames to
@@ -81,15 +74,15 @@ std::vector<double> numbers_of(const OIIO::ParamValue& p) {
   return out;
 }
 
-std::optional<Mat4d> matrix_attr(const OIIO::ImageSpec& spec, const std::string& name,
-                                 const std::string& file) {
+std::optional<Imath::M44d> matrix_attr(const OIIO::ImageSpec& spec, const std::string& name,
+                                       const std::string& file) {
   const OIIO::ParamValue* p = find_attr(spec, name);
   if (!p) return std::nullopt;
   const std::vector<double> v = numbers_of(*p);
   if (v.size() != 16)
     throw_input(file, "header attribute " + std::string(p->name()) + " is not a 4x4 matrix");
-  Mat4d m;
-  for (int i = 0; i < 16; ++i) m.m[i / 4][i % 4] = v[i];
+  Imath::M44d m;
+  for (int i = 0; i < 16; ++i) m[i / 4][i % 4] = v[i];
   return m;
 }
 
@@ -112,7 +105,8 @@ double pixel_aspect_of(const OIIO::ImageSpec& spec) {
 // screen window"): centre C and width W on the z = 1 plane; its height follows from the display
 // window and the pixel aspect ratio, and it covers the display window. Screen y points up, NDC
 // y down, so the window maps to NDC [0,1]^2 as RenderMan maps its screen window to NDC.
-Mat4d screen_to_ndc(const OIIO::ImageSpec& spec, const Box2i& display, const std::string& file) {
+Imath::M44d screen_to_ndc(const OIIO::ImageSpec& spec, const Box2i& display,
+                          const std::string& file) {
   double cx = 0, cy = 0, width = 1;
   if (const OIIO::ParamValue* p = find_attr(spec, "screenWindowCenter")) {
     const std::vector<double> v = numbers_of(*p);
@@ -125,16 +119,16 @@ Mat4d screen_to_ndc(const OIIO::ImageSpec& spec, const Box2i& display, const std
     throw_input(file, "screenWindowCenter/screenWindowWidth do not define a screen window");
   const double height =
       width * display.height() / (static_cast<double>(display.width()) * pixel_aspect_of(spec));
-  Mat4d s;
-  s.m[0][0] = 1 / width;
-  s.m[1][1] = -1 / height;
-  s.m[3][0] = 0.5 - cx / width;
-  s.m[3][1] = 0.5 + cy / height;
+  Imath::M44d s;
+  s[0][0] = 1 / width;
+  s[1][1] = -1 / height;
+  s[3][0] = 0.5 - cx / width;
+  s[3][1] = 0.5 + cy / height;
   return s;
 }
 
-Camera from_matrices(const Mat4d& world_to_camera, const Mat4d& world_to_ndc, const Box2i& display,
-                     const std::string& file, const std::string& source) {
+Camera from_matrices(const Imath::M44d& world_to_camera, const Imath::M44d& world_to_ndc,
+                     const Box2i& display, const std::string& file, const std::string& source) {
   Camera c = camera_from_matrices(world_to_camera, world_to_ndc, display, file);
   c.source = "header " + source;
   return c;
@@ -142,8 +136,8 @@ Camera from_matrices(const Mat4d& world_to_camera, const Mat4d& world_to_ndc, co
 
 // A camera from a horizontal field of view and, when known, a world-to-camera transform whose
 // camera frame is mapped to ours by `local_to_ours` (a signed permutation).
-Camera from_fov(double hfov_deg, const std::optional<Mat4d>& world_to_local,
-                const Mat4d& local_to_ours, const OIIO::ImageSpec& spec, const Box2i& display,
+Camera from_fov(double hfov_deg, const std::optional<Imath::M44d>& world_to_local,
+                const Imath::M44d& local_to_ours, const OIIO::ImageSpec& spec, const Box2i& display,
                 const std::string& file, const std::string& source) {
   if (!(hfov_deg > 0 && hfov_deg < 180))
     throw_input(file, source + ": field of view " + std::to_string(hfov_deg) +
@@ -152,7 +146,7 @@ Camera from_fov(double hfov_deg, const std::optional<Mat4d>& world_to_local,
   if (world_to_local) {
     c.world_to_camera = *world_to_local * local_to_ours;
     try {
-      c.world_to_camera.inverse();  // the normal transform needs it
+      inverse_checked(c.world_to_camera);  // the normal transform needs it
     } catch (const Error& e) {
       throw_input(file, source + ": " + e.what());
     }
@@ -187,17 +181,17 @@ std::optional<Camera> vray_camera(const OIIO::ImageSpec& spec, const Box2i& disp
       projection && *projection != 0)
     throw_input(file, "V-Ray cameraProjection " + std::to_string(static_cast<int>(*projection)) +
                           " is not a perspective camera; give --fov or --camera");
-  std::optional<Mat4d> transform = matrix_attr(spec, "cameraTransform", file);
+  std::optional<Imath::M44d> transform = matrix_attr(spec, "cameraTransform", file);
   if (!transform) transform = matrix_attr(spec, "worldtocamera", file);
-  std::optional<Mat4d> world_to_local;
+  std::optional<Imath::M44d> world_to_local;
   if (transform) {
     // Written both ways in the wild: translation in the last row (Imath) or last column.
-    Mat4d t = *transform;
-    const double last_col = std::abs(t.m[0][3]) + std::abs(t.m[1][3]) + std::abs(t.m[2][3]);
-    const double last_row = std::abs(t.m[3][0]) + std::abs(t.m[3][1]) + std::abs(t.m[3][2]);
-    if (last_col > 0 && last_row == 0) t = transposed(t);
+    Imath::M44d t = *transform;
+    const double last_col = std::abs(t[0][3]) + std::abs(t[1][3]) + std::abs(t[2][3]);
+    const double last_row = std::abs(t[3][0]) + std::abs(t[3][1]) + std::abs(t[3][2]);
+    if (last_col > 0 && last_row == 0) t = t.transposed();
     try {
-      world_to_local = t.inverse();
+      world_to_local = inverse_checked(t);
     } catch (const Error& e) {
       throw_input(file, std::string("V-Ray cameraTransform: ") + e.what());
     }
@@ -205,13 +199,13 @@ std::optional<Camera> vray_camera(const OIIO::ImageSpec& spec, const Box2i& disp
   bool maya = false;
   if (const OIIO::ParamValue* p = find_attr(spec, "vrayInfo/vrayversion"))
     maya = p->get_string(0).find("Maya") != std::string::npos;
-  Mat4d local_to_ours = diagonal(1, 1, -1);  // +Y up, -Z forward
+  Imath::M44d local_to_ours = diagonal(1, 1, -1);  // +Y up, -Z forward
   if (maya) {
-    local_to_ours = Mat4d();
-    local_to_ours.m[1][1] = 0;
-    local_to_ours.m[2][2] = 0;
-    local_to_ours.m[1][2] = -1;  // local -Y is our +z (forward)
-    local_to_ours.m[2][1] = -1;  // local -Z is our +y (up)
+    local_to_ours = Imath::M44d();
+    local_to_ours[1][1] = 0;
+    local_to_ours[2][2] = 0;
+    local_to_ours[1][2] = -1;  // local -Y is our +z (forward)
+    local_to_ours[2][1] = -1;  // local -Z is our +y (up)
   }
   return from_fov(*fov, world_to_local, local_to_ours, spec, display, file,
                   transform ? "V-Ray cameraTransform/cameraFov" : "V-Ray cameraFov");
@@ -232,7 +226,7 @@ std::optional<Camera> arnold_camera(const OIIO::ImageSpec& spec, const Box2i& di
       fov = 2 * std::atan(0.5 * *aperture / *focal) * 180 / kPi;
   }
   if (!fov) return std::nullopt;
-  std::optional<Mat4d> world_to_camera = matrix_attr(spec, "worldToCamera", file);
+  std::optional<Imath::M44d> world_to_camera = matrix_attr(spec, "worldToCamera", file);
   // OIIO before 2.2 renamed worldToCamera to "worldtocamera".
   if (!world_to_camera) world_to_camera = matrix_attr(spec, "worldtocamera", file);
   return from_fov(*fov, world_to_camera, diagonal(1, 1, -1), spec, display, file,
@@ -241,7 +235,7 @@ std::optional<Camera> arnold_camera(const OIIO::ImageSpec& spec, const Box2i& di
 
 using nlohmann::json;
 
-Mat4d json_matrix(const json& j, const char* key, const std::string& file, int frame) {
+Imath::M44d json_matrix(const json& j, const char* key, const std::string& file, int frame) {
   const std::string where = "frame " + std::to_string(frame) + ": \"" + key + "\"";
   std::vector<double> v;
   if (!j.is_array()) throw_input(file, where + " is not an array");
@@ -258,8 +252,8 @@ Mat4d json_matrix(const json& j, const char* key, const std::string& file, int f
     }
   }
   if (v.size() != 16) throw_input(file, where + " does not hold 16 numbers");
-  Mat4d m;
-  for (int i = 0; i < 16; ++i) m.m[i / 4][i % 4] = v[i];
+  Imath::M44d m;
+  for (int i = 0; i < 16; ++i) m[i / 4][i % 4] = v[i];
   return m;
 }
 
@@ -271,8 +265,8 @@ std::optional<Camera> json_camera(const json& j, const Box2i& display, const std
   const std::string where = "frame " + std::to_string(frame);
   const bool has_w2c = j.contains("worldToCamera"), has_ndc = j.contains("worldToNDC");
   if (has_w2c && has_ndc) {
-    const Mat4d w2c = json_matrix(j["worldToCamera"], "worldToCamera", file, frame);
-    const Mat4d ndc = json_matrix(j["worldToNDC"], "worldToNDC", file, frame);
+    const Imath::M44d w2c = json_matrix(j["worldToCamera"], "worldToCamera", file, frame);
+    const Imath::M44d ndc = json_matrix(j["worldToNDC"], "worldToNDC", file, frame);
     Camera c = camera_from_matrices(w2c, ndc, display, file);
     c.source = source;
     return c;
@@ -296,7 +290,7 @@ std::optional<Camera> json_camera(const json& j, const Box2i& display, const std
   if (has_w2c) {
     c.world_to_camera = json_matrix(j["worldToCamera"], "worldToCamera", file, frame);
     try {
-      c.world_to_camera.inverse();
+      inverse_checked(c.world_to_camera);
     } catch (const Error& e) {
       throw_input(file, where + ": worldToCamera: " + e.what());
     }
@@ -313,11 +307,11 @@ std::optional<Camera> camera_from_header(const OIIO::ImageSpec& spec, const Box2
   // OpenEXR standard attributes (Standard Attributes, "worldToCamera", "worldToNDC"); the
   // "exr/" prefix is Nuke's. OIIO before 2.2 read them as "worldtocamera" and "worldtoscreen"
   // (OIIO pull request #2609 stopped renaming worldToNDC), so that pair means the same.
-  if (std::optional<Mat4d> w2c = matrix_attr(spec, "worldToCamera", file)) {
-    if (std::optional<Mat4d> ndc = matrix_attr(spec, "worldToNDC", file))
+  if (std::optional<Imath::M44d> w2c = matrix_attr(spec, "worldToCamera", file)) {
+    if (std::optional<Imath::M44d> ndc = matrix_attr(spec, "worldToNDC", file))
       return from_matrices(*w2c, *ndc, display_window, file, "worldToCamera/worldToNDC");
     // RenderMan-style screen space: the OpenEXR screen window maps it onto the display window.
-    if (std::optional<Mat4d> screen = matrix_attr(spec, "worldToScreen", file))
+    if (std::optional<Imath::M44d> screen = matrix_attr(spec, "worldToScreen", file))
       return from_matrices(*w2c, *screen * screen_to_ndc(spec, display_window, file),
                            display_window, file, "worldToCamera/worldToScreen");
   }

@@ -206,28 +206,28 @@ void warn_if_no_surfaces(const DepthCounts& counts, std::size_t pixels, DepthKin
 void convert_normals(Image& normal, const Image& depth, NormalSpace space, const Camera& camera,
                      const Box2i& display, const Box2i& data) {
   const bool to_camera = space == NormalSpace::kWorld && camera.has_world_transform;
-  Mat4d inv;
-  if (to_camera) inv = camera.world_to_camera.inverse();
+  Imath::M44d inv;
+  if (to_camera) inv = inverse_checked(camera.world_to_camera);
   detail::parallel_for_rows(normal.height(), [&](int y) {
     for (int x = 0; x < normal.width(); ++x) {
       if (!std::isfinite(depth.at(0, x, y))) {
         for (int c = 0; c < 3; ++c) normal.at(c, x, y) = 0.0f;
         continue;
       }
-      Vec3d n{normal.at(0, x, y), normal.at(1, x, y), normal.at(2, x, y)};
+      Imath::V3d n{normal.at(0, x, y), normal.at(1, x, y), normal.at(2, x, y)};
       if (to_camera) {
-        n = {n.x * inv.m[0][0] + n.y * inv.m[0][1] + n.z * inv.m[0][2],
-             n.x * inv.m[1][0] + n.y * inv.m[1][1] + n.z * inv.m[1][2],
-             n.x * inv.m[2][0] + n.y * inv.m[2][1] + n.z * inv.m[2][2]};
+        n = {n.x * inv[0][0] + n.y * inv[0][1] + n.z * inv[0][2],
+             n.x * inv[1][0] + n.y * inv[1][1] + n.z * inv[1][2],
+             n.x * inv[2][0] + n.y * inv[2][1] + n.z * inv[2][2]};
       }
-      const Vec3d view =
+      const Imath::V3d view =
           camera.view_dir(x + data.x0 - display.x0 + 0.5, y + data.y0 - display.y0 + 0.5);
-      const double len = std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
+      const double len = std::sqrt(n.dot(n));
       if (!(len > 1e-6) || !std::isfinite(len)) {
-        n = {-view.x, -view.y, -view.z};
+        n = -view;
       } else {
-        n = {n.x / len, n.y / len, n.z / len};
-        if (n.x * view.x + n.y * view.y + n.z * view.z > 0) n = {-n.x, -n.y, -n.z};
+        n /= len;
+        if (n.dot(view) > 0) n = -n;
       }
       normal.at(0, x, y) = static_cast<float>(n.x);
       normal.at(1, x, y) = static_cast<float>(n.y);
@@ -245,7 +245,7 @@ Image normals_from_depth(const Image& depth, const Camera& camera, const Box2i& 
   const int w = depth.width(), h = depth.height();
   Image normal(w, h, 3);
   const double ox = data.x0 - display.x0 + 0.5, oy = data.y0 - display.y0 + 0.5;
-  auto point = [&](int x, int y, Vec3d* p) {
+  auto point = [&](int x, int y, Imath::V3d* p) {
     if (x < 0 || y < 0 || x >= w || y >= h) return false;
     const float z = depth.at(0, x, y);
     if (!std::isfinite(z)) return false;
@@ -257,33 +257,32 @@ Image normals_from_depth(const Image& depth, const Camera& camera, const Box2i& 
   constexpr double kFeatureStep = 0.005;
   // The difference towards the neighbour with the smaller depth step, or across a feature one
   // pixel wide at its own depth; false when neither neighbour is a surface.
-  auto derivative = [&](const Vec3d& c, int x, int y, int dx, int dy, Vec3d* d) {
-    Vec3d a, b;
+  auto derivative = [&](const Imath::V3d& c, int x, int y, int dx, int dy, Imath::V3d* d) {
+    Imath::V3d a(0), b(0);
     const bool has_a = point(x + dx, y + dy, &a), has_b = point(x - dx, y - dy, &b);
     if (!has_a && !has_b) return false;
     if (has_a && has_b && (a.z - c.z) * (b.z - c.z) > 0 &&
         std::min(std::fabs(a.z - c.z), std::fabs(b.z - c.z)) > kFeatureStep * c.z) {
-      const Vec3d across = camera.unproject(x + dx + ox, y + dy + oy, c.z);
-      *d = {across.x - c.x, across.y - c.y, across.z - c.z};
+      const Imath::V3d across = camera.unproject(x + dx + ox, y + dy + oy, c.z);
+      *d = across - c;
       return true;
     }
     const bool use_a = has_a && (!has_b || std::fabs(a.z - c.z) <= std::fabs(c.z - b.z));
-    *d = use_a ? Vec3d{a.x - c.x, a.y - c.y, a.z - c.z} : Vec3d{c.x - b.x, c.y - b.y, c.z - b.z};
+    *d = use_a ? a - c : c - b;
     return true;
   };
   detail::parallel_for_rows(h, [&](int y) {
     for (int x = 0; x < w; ++x) {
-      Vec3d c;
+      Imath::V3d c(0);
       if (!point(x, y, &c)) continue;
-      const Vec3d view = camera.view_dir(x + ox, y + oy);
-      Vec3d n{-view.x, -view.y, -view.z}, du, dv;
+      const Imath::V3d view = camera.view_dir(x + ox, y + oy);
+      Imath::V3d n = -view, du(0), dv(0);
       if (derivative(c, x, y, 1, 0, &du) && derivative(c, x, y, 0, 1, &dv)) {
-        const Vec3d cr{du.y * dv.z - du.z * dv.y, du.z * dv.x - du.x * dv.z,
-                       du.x * dv.y - du.y * dv.x};
-        const double len = std::sqrt(cr.x * cr.x + cr.y * cr.y + cr.z * cr.z);
+        const Imath::V3d cr = du.cross(dv);
+        const double len = std::sqrt(cr.dot(cr));
         if (len > 0 && std::isfinite(len)) {
-          n = {cr.x / len, cr.y / len, cr.z / len};
-          if (n.x * view.x + n.y * view.y + n.z * view.z > 0) n = {-n.x, -n.y, -n.z};
+          n = cr / len;
+          if (n.dot(view) > 0) n = -n;
         }
       }
       normal.at(0, x, y) = static_cast<float>(n.x);
@@ -646,7 +645,7 @@ GBuffer embed_in_context(const SequenceInfo& seq, GBuffer region, GBuffer contex
               a.has_world_transform == b.has_world_transform;
   for (int i = 0; i < 4 && same; ++i)
     for (int j = 0; j < 4; ++j)
-      same = same && near(a.world_to_camera.m[i][j], b.world_to_camera.m[i][j]);
+      same = same && near(a.world_to_camera[i][j], b.world_to_camera[i][j]);
   if (!same)
     throw_input(path, "--context: its camera is not the input's frame " +
                           std::to_string(region.frame) + " camera (not the same shot and frame?)");

@@ -22,10 +22,6 @@ namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
-Vec3f along(const Vec3f& o, const Vec3f& d, float t) {
-  return {o.x + t * d.x, o.y + t * d.y, o.z + t * d.z};
-}
-
 // Embree reports errors through a callback; the first message is kept for the exception.
 void keep_first_error(void* user, RTCError, const char* message) {
   auto* first = static_cast<std::string*>(user);
@@ -74,13 +70,13 @@ struct Screen {
   const Camera& camera;
   float offset_x, offset_y;  // data window origin in display-window pixels
 
-  void project(const Vec3f& p, float* sx, float* sy) const {
+  void project(const Imath::V3f& p, float* sx, float* sy) const {
     *sx = static_cast<float>(camera.cx + camera.fx * p.x / p.z) - offset_x;
     *sy = static_cast<float>(camera.cy - camera.fy * p.y / p.z) - offset_y;
   }
 
   // Whether `p` is in front of the camera and within pixel (x, y)'s square.
-  bool in_pixel(const Vec3f& p, int x, int y) const {
+  bool in_pixel(const Imath::V3f& p, int x, int y) const {
     if (!(p.z > 0)) return false;
     float sx, sy;
     project(p, &sx, &sy);
@@ -204,9 +200,10 @@ class SlabScene {
         const float z = g_.depth.at(0, x, y);
         const bool surface = std::isfinite(z);
         const double px = x + ox + 0.5, py = y + oy + 0.5;
-        const Vec3d f = surface ? g_.camera.unproject(px, py, z) : Vec3d{};
+        const Imath::V3d f = surface ? g_.camera.unproject(px, py, z) : Imath::V3d(0);
         const int pixel = y * width_ + x;
-        const Vec3d b = surface ? g_.camera.unproject(px, py, mesh_.slab_back(z, pixel)) : Vec3d{};
+        const Imath::V3d b =
+            surface ? g_.camera.unproject(px, py, mesh_.slab_back(z, pixel)) : Imath::V3d(0);
         const std::size_t p = 3 * static_cast<std::size_t>(pixel);
         front[p] = static_cast<float>(f.x), front[p + 1] = static_cast<float>(f.y);
         front[p + 2] = static_cast<float>(f.z);
@@ -240,9 +237,10 @@ void skip_own_pixel(const RTCFilterFunctionNArguments* args) {
   for (unsigned k = 0; k < args->N; ++k) {
     if (args->valid[k] == 0) continue;
     const float t = RTCRayN_tfar(args->ray, args->N, k);
-    const Vec3f p{RTCRayN_org_x(args->ray, args->N, k) + t * RTCRayN_dir_x(args->ray, args->N, k),
-                  RTCRayN_org_y(args->ray, args->N, k) + t * RTCRayN_dir_y(args->ray, args->N, k),
-                  RTCRayN_org_z(args->ray, args->N, k) + t * RTCRayN_dir_z(args->ray, args->N, k)};
+    const Imath::V3f p{
+        RTCRayN_org_x(args->ray, args->N, k) + t * RTCRayN_dir_x(args->ray, args->N, k),
+        RTCRayN_org_y(args->ray, args->N, k) + t * RTCRayN_dir_y(args->ray, args->N, k),
+        RTCRayN_org_z(args->ray, args->N, k) + t * RTCRayN_dir_z(args->ray, args->N, k)};
     if (query->screen->in_pixel(p, query->self_x, query->self_y)) args->valid[k] = 0;
   }
 }
@@ -280,7 +278,7 @@ class ReferenceTracer {
 
   // The pixel whose light the ray from `o` along unit `d`, cast from pixel (x, y), brings; -1
   // for a miss.
-  int trace(const Vec3f& o, const Vec3f& d, int x, int y) const {
+  int trace(const Imath::V3f& o, const Imath::V3f& d, int x, int y) const {
     if (!std::isfinite(o.x + o.y + o.z + d.x + d.y + d.z)) return -1;
     RayQuery query;
     rtcInitIntersectContext(&query.embree);
@@ -303,14 +301,14 @@ class ReferenceTracer {
     float t_end = tfar_;
     if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
       const bool enters = rh.hit.Ng_x * d.x + rh.hit.Ng_y * d.y + rh.hit.Ng_z * d.z < 0;
-      if (enters) return light_at(scene_.triangle_of(rh.hit.primID), along(o, d, rh.ray.tfar));
+      if (enters) return light_at(scene_.triangle_of(rh.hit.primID), o + rh.ray.tfar * d);
       t_end = rh.ray.tfar;
     }
     return light_where_counting_starts(o, d, t_end, x, y);
   }
 
  private:
-  int light_at(const MeshTriangle& t, const Vec3f& p) const {
+  int light_at(const MeshTriangle& t, const Imath::V3f& p) const {
     float sx, sy;
     screen_.project(p, &sx, &sy);
     // surface_at's rule applied to the triangle the hit is on, which surface_at might not pick
@@ -324,11 +322,12 @@ class ReferenceTracer {
   // is outside its own pixel, or where it leaves its own pixel. Tests both points the march's
   // way (the mesh surface there, and the ray's perspective-correct depth) and returns the light
   // of the first one inside, or -1.
-  int light_where_counting_starts(const Vec3f& o, const Vec3f& d, float t_end, int x, int y) const {
+  int light_where_counting_starts(const Imath::V3f& o, const Imath::V3f& d, float t_end, int x,
+                                  int y) const {
     float t = std::min(t_end, kFarFactor * o.z);
     if (d.z < 0) t = std::min(t, (o.z - kNearFraction * o.z) / -d.z);
     if (!(t > 0)) return -1;
-    const Vec3f e = along(o, d, t);
+    const Imath::V3f e = o + t * d;
     float sx0, sy0, sx1, sy1;
     screen_.project(o, &sx0, &sy0);
     screen_.project(e, &sx1, &sy1);
@@ -373,7 +372,7 @@ void trace_pixel(const GBuffer& g, const GiSettings& settings, const ReferenceTr
   *missed = 0;
   for (int k = 0; k < settings.rays; ++k) {
     float jitter;  // the march's; Embree needs none
-    const Vec3f d = rays.direction(k, &jitter);
+    const Imath::V3f d = rays.direction(k, &jitter);
     const int end = tracer.trace(rays.origin(), d, x, y);
     hit[k] = end >= 0 ? mark_hit(g, end, rays.origin()) : end;
     if (end >= 0) continue;
