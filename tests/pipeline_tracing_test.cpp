@@ -201,13 +201,12 @@ TEST(Pipeline, MultiframeFindsALitFaceOnlyANeighbourShows) {
     }
   SequenceInfo seq = groove.f.seq;
   seq.frames = seq.frames_on_disk = {1, 2};
-  const Pipeline pipeline(seq, s);
+  const detail::FrameStages pipeline(seq, s);
   ASSERT_EQ(pipeline.plan().multiframe, s.temporal_radius);
-  const detail::TracedLight ta = pipeline.stages().trace_light(a),
-                            tb = pipeline.stages().trace_light(b);
+  const detail::TracedLight ta = pipeline.trace_light(a), tb = pipeline.trace_light(b);
   for (float v : ta.light.data()) ASSERT_EQ(v, 0.0f);  // alone it sees no light
   Image light, coverage;
-  ASSERT_TRUE(pipeline.stages().continue_light(a, {&ta, &tb}, 0, &light, &coverage));
+  ASSERT_TRUE(pipeline.continue_light(a, {&ta, &tb}, 0, &light, &coverage));
 
   // The expected share, over a grid of cosine-weighted directions.
   const Camera& camera_b = b.camera;
@@ -254,12 +253,11 @@ TEST(Pipeline, MultiframeFindsALitFaceOnlyANeighbourShows) {
   {
     GiSettings framed = s;
     framed.miss = MissMode::kFrame;
-    const Pipeline p(seq, framed);
-    const detail::TracedLight fa = p.stages().trace_light(a), fb = p.stages().trace_light(b);
+    const detail::FrameStages p(seq, framed);
+    const detail::TracedLight fa = p.trace_light(a), fb = p.trace_light(b);
     ASSERT_EQ(fa.miss_shares.channels(), 3);
     Image continued, continued_coverage, left;
-    ASSERT_TRUE(
-        p.stages().continue_light(a, {&fa, &fb}, 0, &continued, &continued_coverage, &left));
+    ASSERT_TRUE(p.continue_light(a, {&fa, &fb}, 0, &continued, &continued_coverage, &left));
     ASSERT_EQ(left.channels(), 3);
     for (int g = 0; g < 3; ++g)
       for (std::size_t i = 0; i < left.plane_size(); ++i)
@@ -276,8 +274,8 @@ TEST(Pipeline, MultiframeFindsALitFaceOnlyANeighbourShows) {
   // A neighbour with the frame's own camera adds nothing.
   GBuffer still = b;
   still.frame = 1;
-  const detail::TracedLight ts = pipeline.stages().trace_light(still);
-  EXPECT_FALSE(pipeline.stages().continue_light(still, {&ts, &tb}, 0, &light, &coverage));
+  const detail::TracedLight ts = pipeline.trace_light(still);
+  EXPECT_FALSE(pipeline.continue_light(still, {&ts, &tb}, 0, &light, &coverage));
 }
 
 // A lit panel in front of a backdrop, over a floor: the backdrop sees the panel's unlit back,

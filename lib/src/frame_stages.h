@@ -23,7 +23,7 @@ class FrameStages {
   // Loads what the whole run shares (the colour config and its processors, the environment
   // map); `memory` bounds what the reference keeps. Throws ssgi::Error.
   FrameStages(const SequenceInfo& sequence, const GiSettings& settings,
-              const PipelineMemory& memory);
+              const PipelineMemory& memory = {});
 
   const Plan& plan() const { return plan_; }
   const GiSettings& settings() const { return settings_; }

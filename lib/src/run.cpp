@@ -9,12 +9,12 @@
 #include <map>
 #include <set>
 
+#include "frame_stages.h"
 #include "io/preview.h"
 #include "memory.h"
 #include "parallel.h"
 #include "sequence_processor.h"
 #include "ssgi/log.h"
-#include "ssgi/pipeline.h"
 #include "ssgi/settings.h"
 #include "ssgi/version.h"
 
@@ -143,7 +143,7 @@ RunReport run_sequence(const RunOptions& options, const RunCallbacks& callbacks)
   const SequencePattern out = output_pattern(options.output, "output");
   const SequencePattern preview = output_pattern(options.preview, "--preview");
   const bool write_exr = !options.output.empty(), write_preview = !options.preview.empty();
-  const Pipeline pipeline(seq, options.gi, memory);
+  const detail::FrameStages pipeline(seq, options.gi, memory);
   const Plan& plan = pipeline.plan();
   for (const std::string& reason : plan.reasons) log_info("plan: " + reason);
 

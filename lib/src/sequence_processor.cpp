@@ -219,7 +219,7 @@ class Processor {
   Processor(const SequenceJob& job, const RunCallbacks& callbacks)
       : job_(job),
         seq_(*job.sequence),
-        stages_(job.pipeline->stages()),
+        stages_(*job.pipeline),
         callbacks_(callbacks),
         mode_(stages_.plan().temporal),
         radius_(stages_.settings().temporal_radius),

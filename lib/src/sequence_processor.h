@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
+#include "frame_stages.h"
 #include "io/input_frame.h"
 #include "ssgi/io.h"
-#include "ssgi/pipeline.h"
 #include "ssgi/report.h"
 
 namespace ssgi::detail {
@@ -21,7 +21,7 @@ using WriteMadeFrame = std::function<void(const GBuffer&, FrameResult&, const De
 struct SequenceJob {
   const SequenceInfo* sequence = nullptr;
   const InputOptions* input = nullptr;
-  const Pipeline* pipeline = nullptr;
+  const FrameStages* pipeline = nullptr;
   // Passthrough: each input's pixels are kept, in their own formats, until its frame is
   // written; the G-buffer of a frame that waits for its window's later frames is converted from
   // them again rather than kept beside them.

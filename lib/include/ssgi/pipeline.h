@@ -44,9 +44,6 @@ class Pipeline {
   // coverage at the frame's resolution when given (FrameResult::coverage).
   FrameResult composite(const GBuffer& frame, Image indirect, Image coverage = {}) const;
 
-  // The stages one by one, for the library's own sequence processor (lib/src/frame_stages.h).
-  const detail::FrameStages& stages() const { return *stages_; }
-
  private:
   std::unique_ptr<const detail::FrameStages> stages_;
 };
