@@ -40,8 +40,9 @@ void print_help() {
       "Runs each preset (and with --grid 12 more settings) over the shot and measures\n"
       "each run's indirect light against ssgi reference on the same frames and, with\n"
       "--truth, against that layer of the input: ms per frame (the frames' gi_ms, mean\n"
-      "of the fastest round), relRMSE, PSNR and SSIM over surface pixels, one row per\n"
-      "run. Scratch frames go to a private temporary directory removed at the end.\n\n%s",
+      "of the fastest round), relRMSE (RMSE / the mean of what it is measured against),\n"
+      "PSNR and SSIM over surface pixels, one row per run. Scratch frames go to a private\n"
+      "temporary directory removed at the end.\n\n%s",
       options_help(kSweepCommand).c_str());
 }
 

@@ -108,8 +108,8 @@ const CompareOptionRow kOptionRows[] = {
      "frames of a sequence (1-50, 1-50x2, 3,7,9); default: the pattern's range, else every "
      "frame on disk"},
     {"metric", required_argument, kOptMetric, OptionGroup::kSsgi, "LIST",
-     "also ssgi's metrics per layer over surface pixels: rmse, relrmse, relmse, psnr, ssim or "
-     "all (man ssgi-compare)"},
+     "also ssgi's metrics per layer over surface pixels: rmse, relrmse (rmse / B's mean), relmse, "
+     "psnr, ssim or all (man ssgi-compare)"},
     {"depth-channel", required_argument, kOptDepthChannel, OptionGroup::kSsgi, "NAME",
      "for --metric: B's channel whose |value| >= 1e9, inf or NaN is background (default: Z or "
      "*depth.Z)"},
