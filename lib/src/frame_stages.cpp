@@ -105,8 +105,7 @@ Image FrameStages::trace(const GBuffer& g, GBuffer* grid_out, Image* coverage,
     }
     case Tracer::kScreenSpace: {
       // The march's rays are freed before the bounces.
-      WeightedHits hits =
-          weighted_from_rays(grid, march_screen_space(g, s, misses));
+      WeightedHits hits = weighted_from_rays(grid, march_screen_space(g, s, misses));
       Image light = gather_bounces(grid, hits, s.bounces, misses, coverage, cube);
       if (shares) *shares = std::move(hits.cube);
       return light;
@@ -119,16 +118,16 @@ Image FrameStages::trace(const GBuffer& g, GBuffer* grid_out, Image* coverage,
   Image light = gather_bounces(grid, hits, s.bounces, misses, coverage, cube);
   if (shares) *shares = hits.cube;
   if (!keep) return light;
-  *keep = std::make_shared<FrameTrace>(g.frame, g.camera, std::move(grid), std::move(hits),
-                                               misses, std::move(missed));
+  *keep = std::make_shared<FrameTrace>(g.frame, g.camera, std::move(grid), std::move(hits), misses,
+                                       std::move(missed));
   return light;
 }
 
 Image FrameStages::denoise_on_grid(const GBuffer& g, Image light) const {
   if (!plan_.denoise) return light;
   const int level = pyramid_level(plan_.trace_scale);
-  return upsample_and_denoise(light, level, g.depth, g.normal, settings_.denoise_settings,
-                                      true, level);
+  return upsample_and_denoise(light, level, g.depth, g.normal, settings_.denoise_settings, true,
+                              level);
 }
 
 TracedLight FrameStages::trace_light(const GBuffer& g) const {
@@ -137,9 +136,9 @@ TracedLight FrameStages::trace_light(const GBuffer& g) const {
   const bool window = plan_.temporal == TemporalMode::kWindow;
   CubeLight cube{};
   Image shares;
-  out.light = trace(
-      g, &out.grid, &out.coverage, plan_.multiframe > 0 ? &out.trace : nullptr,
-      window ? &cube : nullptr, window ? &shares : nullptr, window ? &out.reflected : nullptr);
+  out.light = trace(g, &out.grid, &out.coverage, plan_.multiframe > 0 ? &out.trace : nullptr,
+                    window ? &cube : nullptr, window ? &shares : nullptr,
+                    window ? &out.reflected : nullptr);
   out.light = denoise_on_grid(g, std::move(out.light));
   if (shares.channels() != kCubeFaces) return out;
   double face_total[kCubeFaces] = {};
@@ -165,16 +164,16 @@ TracedLight FrameStages::trace_light(const GBuffer& g) const {
 }
 
 Image FrameStages::finish_coverage(const GBuffer& g, const GBuffer& grid,
-                                const Image& grid_coverage) const {
+                                   const Image& grid_coverage) const {
   return coverage_to_frame(grid_coverage, grid.depth, grid.normal, plan_.trace_scale,
-                                   static_cast<float>(settings_.thickness), g.depth);
+                           static_cast<float>(settings_.thickness), g.depth);
 }
 
 Image FrameStages::finish_light(const GBuffer& g, const Image& grid_light) const {
   const int level = pyramid_level(plan_.trace_scale);
   if (level == 0) return grid_light;
-  return upsample_and_denoise(grid_light, level, g.depth, g.normal,
-                                      settings_.denoise_settings, false);
+  return upsample_and_denoise(grid_light, level, g.depth, g.normal, settings_.denoise_settings,
+                              false);
 }
 
 Image FrameStages::indirect_light(const GBuffer& g, Image* coverage) const {
@@ -188,12 +187,13 @@ Image FrameStages::indirect_light(const GBuffer& g, Image* coverage) const {
   Image light = trace(g, coverage ? &grid : nullptr, coverage);
   if (coverage) *coverage = finish_coverage(g, grid, *coverage);
   if (level == 0 && !plan.denoise) return light;
-  return upsample_and_denoise(light, level, g.depth, g.normal,
-                                      settings_.denoise_settings, plan.denoise);
+  return upsample_and_denoise(light, level, g.depth, g.normal, settings_.denoise_settings,
+                              plan.denoise);
 }
 
 bool FrameStages::continue_light(const GBuffer& g, const std::vector<const TracedLight*>& window,
-                              int center, Image* light, Image* coverage, Image* miss_shares) const {
+                                 int center, Image* light, Image* coverage,
+                                 Image* miss_shares) const {
   std::vector<const FrameTrace*> frames;
   std::vector<const Image*> lights;
   int c = -1;
@@ -207,7 +207,7 @@ bool FrameStages::continue_light(const GBuffer& g, const std::vector<const Trace
   ContinuationReport report;
   Image shares;
   const bool continued = continue_rays(frames, lights, c, settings_, light, coverage,
-                                               miss_shares ? &shares : nullptr, &report);
+                                       miss_shares ? &shares : nullptr, &report);
   log_info(report.describe(frames[c]->frame));
   if (!continued) return false;
   *light = denoise_on_grid(g, std::move(*light));  // as trace_light's
