@@ -88,9 +88,11 @@ struct PresetEntry {
 // unnoticed as a default.
 void check_keys(const nlohmann::json& object, std::initializer_list<const char*> known,
                 const std::string& where) {
-  for (const auto& [key, value] : object.items())
+  for (const auto& item : object.items()) {
+    const std::string& key = item.key();
     if (std::none_of(known.begin(), known.end(), [&](const char* k) { return key == k; }))
       throw Error(ErrorKind::kInternal, "", "layout presets: " + where + ": unknown key " + key);
+  }
 }
 
 // The preset table: lib/src/io/layout_presets.json, a row per renderer, compiled in. Defaults
