@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <tuple>
 #include <utility>
 
 namespace ssgi::detail {
@@ -384,10 +385,7 @@ double out_of_plane_ratio(const std::vector<PositionSample>& samples) {
 
 Camera camera_of(const Model& m) {
   Camera c;
-  c.fx = m.fx;
-  c.fy = m.fy;
-  c.cx = m.cx;
-  c.cy = m.cy;
+  std::tie(c.fx, c.fy, c.cx, c.cy) = std::tie(m.fx, m.fy, m.cx, m.cy);
   c.has_world_transform = true;
   // Row-vector convention: p' = p * M, so M holds R transposed and t in row 3.
   for (int i = 0; i < 3; ++i) {

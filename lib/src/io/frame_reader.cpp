@@ -129,6 +129,38 @@ std::size_t sanitize(Image* image) {
 using FillChannels =
     std::function<void(int subimage, const std::vector<detail::PlaneTarget>& targets)>;
 
+// A frame's channels: their names per subimage, and how to read them.
+struct FrameChannels {
+  const std::vector<std::vector<std::string>>& names;
+  const FillChannels& fill;
+};
+
+// Per subimage, the names of channels to read and the planes they go to.
+using NamedPlanes = std::map<int, std::vector<std::pair<std::string, float*>>>;
+
+// Reads `planes` through `fill`, each subimage's channels found by name among
+// `channel_names[subimage]`. Throws Error(kInput) naming `path` when a subimage or a channel
+// is not there.
+void fill_named_planes(const NamedPlanes& planes, const FrameChannels& channels,
+                       const std::string& path) {
+  const std::vector<std::vector<std::string>>& channel_names = channels.names;
+  for (const auto& [subimage, names] : planes) {
+    if (subimage < 0 || subimage >= static_cast<int>(channel_names.size()))
+      throw_input(path, "has no subimage " + std::to_string(subimage));
+    const std::vector<std::string>& present = channel_names[subimage];
+    std::vector<detail::PlaneTarget> targets;
+    for (const auto& [name, plane] : names) {
+      const auto it = std::find(present.begin(), present.end(), name);
+      if (it == present.end()) throw_input(path, "has no channel '" + name + "'");
+      targets.push_back({static_cast<int>(it - present.begin()), plane});
+    }
+    // A part with a data window of its own (Nuke writes each part's bounding box) gives its
+    // pixels where they fall in the frame's window, 0 elsewhere, as OpenEXR reads pixels
+    // outside a data window.
+    channels.fill(subimage, targets);
+  }
+}
+
 // The name of the position pass in messages: its layer ("ViewLayer.Position"), else its
 // channels.
 std::string position_pass_name(const SequenceInfo& seq) {
@@ -150,28 +182,17 @@ struct PositionPlanes {
   Image position, distance;
 };
 
-PositionPlanes read_position_planes(const SequenceInfo& seq, const FillChannels& fill,
+PositionPlanes read_position_planes(const SequenceInfo& seq, const FrameChannels& channels,
                                     const std::string& path) {
   const int w = seq.data_window.width(), h = seq.data_window.height();
   PositionPlanes p{Image(w, h, 3), Image(w, h, 1)};
-  std::map<int, std::vector<std::pair<std::string, float*>>> by_subimage;
+  NamedPlanes planes;
   const std::vector<ChannelRef>& pos = seq.layout.channels(Role::kPosition);
   for (int c = 0; c < 3; ++c)
-    by_subimage[pos[c].subimage].emplace_back(pos[c].name, p.position.plane(c));
+    planes[pos[c].subimage].emplace_back(pos[c].name, p.position.plane(c));
   const ChannelRef& depth = seq.layout.channels(Role::kDepth).front();
-  by_subimage[depth.subimage].emplace_back(depth.name, p.distance.plane(0));
-  for (const auto& [subimage, names] : by_subimage) {
-    if (subimage < 0 || subimage >= static_cast<int>(seq.channels.channels.size()))
-      throw_input(path, "has no subimage " + std::to_string(subimage));
-    const std::vector<std::string>& present = seq.channels.channels[subimage];
-    std::vector<detail::PlaneTarget> targets;
-    for (const auto& [name, plane] : names) {
-      const auto it = std::find(present.begin(), present.end(), name);
-      if (it == present.end()) throw_input(path, "has no channel '" + name + "'");
-      targets.push_back({static_cast<int>(it - present.begin()), plane});
-    }
-    fill(subimage, targets);
-  }
+  planes[depth.subimage].emplace_back(depth.name, p.distance.plane(0));
+  fill_named_planes(planes, channels, path);
   const LayoutPreset& preset = seq.layout.preset;
   const float inf = std::numeric_limits<float>::infinity();
   for (float& d : p.distance.data()) {
@@ -186,10 +207,10 @@ PositionPlanes read_position_planes(const SequenceInfo& seq, const FillChannels&
 }
 
 // The camera of one frame: the sidecar, --fov, the header, and failing those a fit to the
-// position pass (read through `fill`; without it, or without a position pass, no camera).
+// position pass (read through `channels`; without them, or without a position pass, no camera).
 Camera find_camera(const SequenceInfo& seq, const InputOptions& options,
                    const OIIO::ImageSpec& spec, int frame, const std::string& path,
-                   const FillChannels* fill) {
+                   const FrameChannels* channels) {
   const Box2i& display = seq.display_window;
   if (!options.camera.sidecar.empty())
     return detail::camera_from_sidecar(options.camera.sidecar, frame, display);
@@ -199,9 +220,9 @@ Camera find_camera(const SequenceInfo& seq, const InputOptions& options,
   if (!seq.layout.has(Role::kPosition) || !seq.layout.has(Role::kDepth))
     throw_input(path,
                 "no camera: the header has no worldToCamera/worldToNDC; give --fov or --camera");
-  if (!fill)
+  if (!channels)
     throw_input(path, "no camera in the header: it is fitted to the position pass when read");
-  const PositionPlanes planes = read_position_planes(seq, *fill, path);
+  const PositionPlanes planes = read_position_planes(seq, *channels, path);
   std::size_t lattice = 0;
   const std::vector<detail::PositionSample> samples = detail::position_samples(
       planes.position, planes.distance, display, seq.data_window, &lattice);
@@ -230,7 +251,7 @@ void check_header_camera_against_positions(const SequenceInfo& seq, const InputO
   const FillChannels fill = [&](int subimage, const std::vector<detail::PlaneTarget>& targets) {
     detail::read_float_channels(in, subimage, targets, seq.data_window, path);
   };
-  const PositionPlanes planes = read_position_planes(seq, fill, path);
+  const PositionPlanes planes = read_position_planes(seq, {seq.channels.channels, fill}, path);
   const std::vector<detail::PositionSample> samples = detail::position_samples(
       planes.position, planes.distance, seq.display_window, seq.data_window);
   if (samples.empty()) return;
@@ -608,7 +629,8 @@ Camera read_camera(const SequenceInfo& seq, int frame, const InputOptions& optio
   const FillChannels fill = [&](int subimage, const std::vector<detail::PlaneTarget>& targets) {
     detail::read_float_channels(*in, subimage, targets, seq.data_window, path);
   };
-  return find_camera(seq, options, in->spec(), frame, path, &fill);
+  const FrameChannels channels{seq.channels.channels, fill};
+  return find_camera(seq, options, in->spec(), frame, path, &channels);
 }
 
 namespace {
@@ -629,7 +651,11 @@ GBuffer convert_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
   g.frame = frame;
   g.display_window = seq.display_window;
   g.data_window = seq.data_window;
-  g.camera = find_camera(seq, options, spec, frame, path, &fill);
+  std::vector<std::vector<std::string>> channel_names;
+  for (const detail::DecodedInput::Part& part : input.parts)
+    channel_names.push_back(part.spec.channelnames);
+  const FrameChannels frame_channels{channel_names, fill};
+  g.camera = find_camera(seq, options, spec, frame, path, &frame_channels);
   if (report) log_info(path + ": camera from " + g.camera.source);
   const int w = g.width(), h = g.height();
 
@@ -645,7 +671,7 @@ GBuffer convert_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
     return static_cast<int>(seq.layout.channels(role).size());
   };
   Image motion_xy, motion_zw;
-  std::map<int, std::vector<std::pair<std::string, float*>>> by_subimage;
+  NamedPlanes by_subimage;
   const auto target = [&](Role role, Image* image, int first, int count) {
     const std::vector<ChannelRef>& refs = seq.layout.channels(role);
     for (int c = 0; c < count; ++c)
@@ -682,21 +708,7 @@ GBuffer convert_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
     if (n < 4) std::fill_n(g.beauty.plane(n), g.beauty.plane_size(), 1.0f);
     target(Role::kBeauty, &g.beauty, 0, n);
   }
-  for (const auto& [subimage, names] : by_subimage) {
-    if (subimage < 0 || subimage >= static_cast<int>(input.parts.size()))
-      throw_input(path, "has no subimage " + std::to_string(subimage));
-    const std::vector<std::string>& present = input.parts[subimage].spec.channelnames;
-    std::vector<detail::PlaneTarget> targets;
-    for (const auto& [name, plane] : names) {
-      const auto it = std::find(present.begin(), present.end(), name);
-      if (it == present.end()) throw_input(path, "has no channel '" + name + "'");
-      targets.push_back({static_cast<int>(it - present.begin()), plane});
-    }
-    // A part with a data window of its own (Nuke writes each part's bounding box) gives its
-    // pixels where they fall in the frame's window, 0 elsewhere, as OpenEXR reads pixels
-    // outside a data window.
-    fill(subimage, targets);
-  }
+  fill_named_planes(by_subimage, frame_channels, path);
 
   std::size_t non_finite = 0;
   if (roles & role_bit(Role::kDepth)) {
