@@ -169,6 +169,22 @@ TEST(CameraFitTest, FlatWallFacingTheCameraIsRefused) {
   }
 }
 
+TEST(CameraFitTest, SkewIsRefused) {
+  // px = cx + (fx x + s y) / z: a sheared image the library's cameras cannot represent. With
+  // s = 4 px per unit y/z the top and bottom rows shift by 1.3 px, which a camera without skew
+  // cannot take up within half a pixel (its residual is 0.64 px) and one with skew fits
+  // exactly: refused as skew, not as a lens that is no pinhole.
+  const Camera want = KnownCamera(280, 280, 160, 90, true);
+  const double s = 4;
+  const auto sheared = [&](double px, double py, double z) {
+    const double y = (want.cy - py) * z / want.fy;
+    return Imath::V3d((px - want.cx - s * y / z) * z / want.fx, y, z);
+  };
+  const CameraFitResult fit = Fit(Render(want, 320, 180, Hills, sheared));
+  ASSERT_FALSE(fit.ok);
+  EXPECT_NE(fit.problem.find("skew"), std::string::npos) << fit.problem;
+}
+
 TEST(CameraFitTest, TooFewSurfacePixelsAreRefused) {
   // Surface only in a 20 x 20 px corner: 16 lattice points, fewer than the 50 needed.
   const Camera want = KnownCamera(280, 280, 160, 90, true);

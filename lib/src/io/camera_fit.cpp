@@ -121,9 +121,10 @@ bool solve(std::vector<double> a, std::vector<double> b, int n, std::vector<doub
 }
 
 // The camera model refined by Levenberg-Marquardt: camera point c = R w + t (column vectors),
-// px = cx + fx c.x / c.z, py = cy - fy c.y / c.z.
+// px = cx + (fx c.x + skew c.y) / c.z, py = cy - fy c.y / c.z. The library's cameras have no
+// skew: it is fitted only to tell a sheared projection from one that fits no camera.
 struct Model {
-  double fx = 1, fy = 1, cx = 0, cy = 0;
+  double fx = 1, fy = 1, cx = 0, cy = 0, skew = 0;
   Mat3 r{};  // world to camera; a rotation, or a rotation times a reflection
   Imath::V3d t{0, 0, 0};
 
@@ -143,7 +144,7 @@ std::vector<double> squared_errors(const Model& m, const std::vector<PositionSam
       e[i] = std::numeric_limits<double>::infinity();
       continue;
     }
-    const double du = m.cx + m.fx * c.x / c.z - samples[i].px;
+    const double du = m.cx + (m.fx * c.x + m.skew * c.y) / c.z - samples[i].px;
     const double dv = m.cy - m.fy * c.y / c.z - samples[i].py;
     e[i] = du * du + dv * dv;
   }
@@ -174,21 +175,22 @@ Mat3 rotation(const Imath::V3d& w) {
 
 // Levenberg-Marquardt on the reprojection error over 10 parameters: fx, fy, cx, cy, a rotation
 // of camera space about its origin (R <- exp(w) R, t <- exp(w) t: the camera turns in place)
-// and a step of t.
-Model refine(Model m, const std::vector<PositionSample>& samples) {
-  constexpr int kParams = 10;
+// and a step of t; with `fit_skew` an 11th, the skew (else it stays as it is).
+Model refine(Model m, const std::vector<PositionSample>& samples, bool fit_skew) {
+  constexpr int kMaxParams = 11;
+  const int params = fit_skew ? 11 : 10;
   double cost = total(squared_errors(m, samples));
   if (!std::isfinite(cost)) return m;
   double lambda = 1e-3;
   for (int iteration = 0; iteration < 100; ++iteration) {
-    std::vector<double> jtj(kParams * kParams, 0.0), jtr(kParams, 0.0);
+    std::vector<double> jtj(params * params, 0.0), jtr(params, 0.0);
     for (const PositionSample& s : samples) {
       const Imath::V3d c = m.to_camera(s.world);
       const double iz = 1 / c.z;
-      const double ru = m.cx + m.fx * c.x * iz - s.px;
+      const double ru = m.cx + (m.fx * c.x + m.skew * c.y) * iz - s.px;
       const double rv = m.cy - m.fy * c.y * iz - s.py;
       // d(residual)/d(camera point), then through dc/dw = -[c]x and dc/dt = I.
-      const Imath::V3d gu{m.fx * iz, 0, -m.fx * c.x * iz * iz};
+      const Imath::V3d gu{m.fx * iz, m.skew * iz, -(m.fx * c.x + m.skew * c.y) * iz * iz};
       const Imath::V3d gv{0, -m.fy * iz, m.fy * c.y * iz * iz};
       const auto row = [&](const Imath::V3d& g, double dfx, double dfy, double dcx, double dcy,
                            double* j) {
@@ -205,22 +207,24 @@ Model refine(Model m, const std::vector<PositionSample>& samples) {
         j[8] = g.y;
         j[9] = g.z;
       };
-      double ju[kParams], jv[kParams];
+      double ju[kMaxParams], jv[kMaxParams];
       row(gu, c.x * iz, 0, 1, 0, ju);
       row(gv, 0, -c.y * iz, 0, 1, jv);
-      for (int i = 0; i < kParams; ++i) {
+      ju[10] = c.y * iz;
+      jv[10] = 0;
+      for (int i = 0; i < params; ++i) {
         jtr[i] += ju[i] * ru + jv[i] * rv;
-        for (int k = 0; k < kParams; ++k) jtj[i * kParams + k] += ju[i] * ju[k] + jv[i] * jv[k];
+        for (int k = 0; k < params; ++k) jtj[i * params + k] += ju[i] * ju[k] + jv[i] * jv[k];
       }
     }
     bool improved = false;
     while (lambda < 1e12) {
-      std::vector<double> a = jtj, b(kParams), step;
-      for (int i = 0; i < kParams; ++i) {
-        a[i * kParams + i] += lambda * std::max(jtj[i * kParams + i], 1e-300);
+      std::vector<double> a = jtj, b(params), step;
+      for (int i = 0; i < params; ++i) {
+        a[i * params + i] += lambda * std::max(jtj[i * params + i], 1e-300);
         b[i] = -jtr[i];
       }
-      if (!solve(a, b, kParams, &step)) {
+      if (!solve(a, b, params, &step)) {
         lambda *= 10;
         continue;
       }
@@ -237,6 +241,7 @@ Model refine(Model m, const std::vector<PositionSample>& samples) {
                           dr[1][0] * m.t.x + dr[1][1] * m.t.y + dr[1][2] * m.t.z,
                           dr[2][0] * m.t.x + dr[2][1] * m.t.y + dr[2][2] * m.t.z) +
                Imath::V3d(step[7], step[8], step[9]);
+      if (fit_skew) next.skew += step[10];
       const double next_cost = total(squared_errors(next, samples));
       if (next_cost < cost) {
         const bool small = cost - next_cost <= 1e-15 * cost;
@@ -318,9 +323,9 @@ bool direct_linear_transform(const std::vector<PositionSample>& samples,
 
 // P = K [R | t] with K upper triangular, by Gram-Schmidt from the last row (an RQ
 // decomposition), in the library's signs: K = [fx s cx; 0 -fy cy; 0 0 1] with fx, fy > 0, and
-// the samples in front (camera z > 0). Returns the skew s in `skew`.
+// the samples in front (camera z > 0); the skew s goes to m->skew.
 bool decompose(std::array<std::array<double, 4>, 3> p, const std::vector<PositionSample>& samples,
-               Model* m, double* skew) {
+               Model* m) {
   double in_front = 0;
   for (const PositionSample& s : samples)
     in_front += p[2][0] * s.world.x + p[2][1] * s.world.y + p[2][2] * s.world.z + p[2][3];
@@ -347,7 +352,7 @@ bool decompose(std::array<std::array<double, 4>, 3> p, const std::vector<Positio
   m->fy = k11 / k22;
   m->cx = k02 / k22;
   m->cy = k12 / k22;
-  *skew = -k01 / k22;
+  m->skew = -k01 / k22;
   const Imath::V3d rows[3] = {r1, -r2, r3};
   for (int i = 0; i < 3; ++i) {
     m->r[i][0] = rows[i].x;
@@ -357,7 +362,7 @@ bool decompose(std::array<std::array<double, 4>, 3> p, const std::vector<Positio
   // t = K^-1 p4 / k22 with K = [fx s cx; 0 -fy cy; 0 0 1].
   const double t2 = p[2][3] / k22;
   const double t1 = -(p[1][3] / k22 - m->cy * t2) / m->fy;
-  const double t0 = (p[0][3] / k22 - m->cx * t2 - *skew * t1) / m->fx;
+  const double t0 = (p[0][3] / k22 - m->cx * t2 - m->skew * t1) / m->fx;
   m->t = Imath::V3d(t0, t1, t2);
   return std::isfinite(m->fx) && std::isfinite(m->fy) && std::isfinite(t0) && std::isfinite(t1) &&
          std::isfinite(t2);
@@ -463,20 +468,16 @@ CameraFitResult fit_camera_to_positions(const std::vector<PositionSample>& sampl
     return result;
   }
   std::array<std::array<double, 4>, 3> p{};
-  Model model;
-  double skew = 0;
-  if (!direct_linear_transform(samples, &p) || !decompose(p, samples, &model, &skew) ||
-      !(model.fx > 0 && model.fy > 0)) {
+  Model projection;
+  if (!direct_linear_transform(samples, &p) || !decompose(p, samples, &projection) ||
+      !(projection.fx > 0 && projection.fy > 0)) {
     result.problem =
         what + ": its positions give no projection (a degenerate configuration)" + remedy;
     return result;
   }
-  // The skew's shift at the image's edge: s * (y/z) with |y/z| up to the half-height over fy.
-  double half_height = 0;
-  for (const PositionSample& s : samples)
-    half_height = std::max(half_height, std::fabs(s.py - model.cy));
-  const double skew_px = std::fabs(skew) * half_height / model.fy;
-  model = refine(model, samples);
+  Model model = projection;
+  model.skew = 0;
+  model = refine(model, samples, false);
   std::vector<double> errors = squared_errors(model, samples);
   const double all_rms = rms(errors);
   // One round of outlier rejection: pixels whose positions are blends the lattice test missed.
@@ -487,7 +488,7 @@ CameraFitResult fit_camera_to_positions(const std::vector<PositionSample>& sampl
   result.rejected = samples.size() - kept.size();
   if (result.rejected > 0 && kept.size() >= kMinSamples &&
       result.rejected <= kMaxRejectedFraction * static_cast<double>(samples.size())) {
-    model = refine(model, kept);
+    model = refine(model, kept, false);
     errors = squared_errors(model, kept);
   } else {
     kept = samples;
@@ -495,6 +496,18 @@ CameraFitResult fit_camera_to_positions(const std::vector<PositionSample>& sampl
   }
   result.samples = kept.size();
   result.residual_px = rms(errors);
+  // The same fit with skew: a sheared projection is refused as such when skew explains it (the
+  // camera with skew fits) and shifts the image's top or bottom row by more than kMaxSkewPx.
+  const Model sheared = refine(projection, kept, true);
+  double half_height = 0;
+  for (const PositionSample& s : kept)
+    half_height = std::max(half_height, std::fabs(s.py - sheared.cy));
+  const double skew_px = std::fabs(sheared.skew) * half_height / sheared.fy;
+  if (skew_px > kMaxSkewPx && rms(squared_errors(sheared, kept)) <= kMaxFitResidualPx) {
+    result.problem = what + ": the projection it gives has skew (" + format_px(skew_px) +
+                     " px across the image), which no pinhole camera has" + remedy;
+    return result;
+  }
   if (!(result.residual_px <= kMaxFitResidualPx)) {
     result.problem =
         what + " does not fit a pinhole camera (residual " +
@@ -503,11 +516,6 @@ CameraFitResult fit_camera_to_positions(const std::vector<PositionSample>& sampl
         "): a fisheye or panoramic lens, motion-blurred positions, or a position pass not in "
         "world space" +
         remedy;
-    return result;
-  }
-  if (skew_px > kMaxSkewPx) {
-    result.problem = what + ": the projection it gives has skew (" + format_px(skew_px) +
-                     " px across the image), which no pinhole camera has" + remedy;
     return result;
   }
   if (!(model.fx > 0 && model.fy > 0 && std::isfinite(model.fx) && std::isfinite(model.fy))) {
