@@ -110,6 +110,31 @@ TEST_F(Cli, HeaderCameraThatDisagreesWithThePositionsIsWarnedAboutOnce) {
   EXPECT_EQ(agree.err, "");
 }
 
+TEST_F(Cli, PositionsInTheHeaderCamerasSpaceAreNotADisagreement) {
+  // The frame's positions moved into its camera space (x right, y up, +z forward), as
+  // RenderMan writes P: they agree with the header's projection alone.
+  ExrImage frame = read_exr(testdata("asrendered/header.0001.exr"));
+  const OIIO::ParamValue* m = frame.spec.find_attribute("worldToCamera");
+  ASSERT_NE(m, nullptr);
+  const float* w2c = static_cast<const float*>(m->data());
+  std::vector<float>& x = frame.planes.at("ViewLayer.Position.X");
+  std::vector<float>& y = frame.planes.at("ViewLayer.Position.Y");
+  std::vector<float>& z = frame.planes.at("ViewLayer.Position.Z");
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    const double p[4] = {x[i], y[i], z[i], 1};
+    double c[3] = {0, 0, 0};
+    for (int j = 0; j < 3; ++j)
+      for (int k = 0; k < 4; ++k) c[j] += p[k] * w2c[k * 4 + j];
+    x[i] = static_cast<float>(c[0]);
+    y[i] = static_cast<float>(c[1]);
+    z[i] = static_cast<float>(c[2]);
+  }
+  write_exr(path("camspace.0001.exr"), frame);
+  const CliResult r = run_ssgi({"info", path("camspace.0001.exr")});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+}
+
 TEST_F(Cli, CyclesFramesWithTheirHeaderCamerasStripped) {
   const std::string source = kSharedData + "/room/room.0003.exr";
   if (!fs::exists(source)) GTEST_SKIP() << "no sample data at " << kSharedData;

@@ -236,7 +236,7 @@ Camera find_camera(const SequenceInfo& seq, const InputOptions& options,
 // by more than a pixel (RMS distance of the positions, projected by the header camera, from
 // their pixel centres): a header written for another frame or resolution, or positions not in
 // world space. Silent when they agree, as in frames whose header was written from the camera
-// that rendered them.
+// that rendered them, and when the positions are in the header camera's camera space.
 void check_header_camera_against_positions(const SequenceInfo& seq, const InputOptions& options,
                                            OIIO::ImageInput& in, const std::string& path) {
   if (!options.camera.sidecar.empty() || options.camera.hfov_deg > 0) return;
@@ -255,9 +255,15 @@ void check_header_camera_against_positions(const SequenceInfo& seq, const InputO
   const std::vector<detail::PositionSample> samples = detail::position_samples(
       planes.position, planes.distance, seq.display_window, seq.data_window);
   if (samples.empty()) return;
-  const double rms = detail::reprojection_rms_px(*camera, samples, seq.display_window);
   // A pixel: below it the two agree as closely as a filtered position pass can show.
-  if (rms <= 1.0) return;
+  constexpr double kAgreePx = 1.0;
+  const double rms = detail::reprojection_rms_px(*camera, samples, seq.display_window);
+  if (rms <= kAgreePx) return;
+  // A position pass in camera space (RenderMan's "current" space) agrees with the header's
+  // projection alone.
+  Camera camera_space = *camera;
+  camera_space.world_to_camera = Imath::M44d();
+  if (detail::reprojection_rms_px(camera_space, samples, seq.display_window) <= kAgreePx) return;
   char text[32];
   std::snprintf(text, sizeof text, "%.3g", rms);
   log_warning(path + ": the header camera (" + camera->source + ") and the position pass " +
@@ -470,6 +476,10 @@ std::string corners(const Box2i& b) {
          std::to_string(b.x1 - 1) + "," + std::to_string(b.y1 - 1) + ")";
 }
 
+// open_sequence; with `check_header_camera`, the first frame's header camera is checked against
+// its position pass (not for a --context, whose cameras must be the input's).
+SequenceInfo open_sequence(const InputOptions& options, bool check_header_camera);
+
 // --context: the whole picture's frames, probed from the one matching `seq`'s first frame with
 // the same reading options; its frames are `seq`'s. Throws Error(kInput) naming the context's
 // file when its display window is not `seq`'s or its data window does not hold `seq`'s.
@@ -482,7 +492,7 @@ std::shared_ptr<const SequenceInfo> open_context(const SequenceInfo& seq,
   c.skip_missing = false;
   std::shared_ptr<SequenceInfo> context;
   try {
-    context = std::make_shared<SequenceInfo>(open_sequence(c));
+    context = std::make_shared<SequenceInfo>(open_sequence(c, false));
   } catch (const Error& e) {
     throw Error(e.kind(), e.file(),
                 "--context: " + std::string(e.what()) + " (the input's first frame is " +
@@ -511,9 +521,7 @@ std::shared_ptr<const SequenceInfo> open_context(const SequenceInfo& seq,
   return context;
 }
 
-}  // namespace
-
-SequenceInfo open_sequence(const InputOptions& options) {
+SequenceInfo open_sequence(const InputOptions& options, bool check_header_camera) {
   SequenceInfo seq;
   std::vector<int> frames_in_name;
   seq.pattern = parse_sequence_pattern(options.pattern, &frames_in_name);
@@ -609,7 +617,6 @@ SequenceInfo open_sequence(const InputOptions& options) {
       // or none at all: reading the frame reports it.
     }
   }
-  check_header_camera_against_positions(seq, options, *in, first);
   if (!options.context.empty()) {
     seq.context = open_context(seq, options);
     // The temporal stage's neighbours are the whole shot's: a frame the region lacks is read
@@ -620,8 +627,13 @@ SequenceInfo open_sequence(const InputOptions& options) {
                    std::back_inserter(both));
     seq.frames_on_disk = std::move(both);
   }
+  if (check_header_camera) check_header_camera_against_positions(seq, options, *in, first);
   return seq;
 }
+
+}  // namespace
+
+SequenceInfo open_sequence(const InputOptions& options) { return open_sequence(options, true); }
 
 Camera read_camera(const SequenceInfo& seq, int frame, const InputOptions& options) {
   const std::string path = seq.pattern.path_for(frame);
