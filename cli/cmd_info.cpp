@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "commands.h"
@@ -95,11 +96,13 @@ void print_json(const ssgi::InputOptions& in, const ssgi::SequenceInfo& seq, con
   for (const auto& [name, value] : r.settings) settings[name] = value;
   Json cameras = Json::array();
   for (const Report::FrameCamera& c : r.cameras) {
-    if (c.camera)
-      cameras.push_back({{"frame", c.frame},
-                         {"source", c.camera->source},
-                         {"hfov_deg", c.camera->hfov_deg(seq.display_window.width())}});
-    else
+    if (c.camera) {
+      Json camera = {{"frame", c.frame},
+                     {"source", c.camera->source},
+                     {"hfov_deg", c.camera->hfov_deg(seq.display_window.width())}};
+      if (c.camera->fit_residual_px) camera["fit_residual_px"] = *c.camera->fit_residual_px;
+      cameras.push_back(std::move(camera));
+    } else
       cameras.push_back({{"frame", c.frame}, {"error", c.error}});
   }
   Json out = {

@@ -4,6 +4,7 @@
 #include <Imath/ImathMatrix.h>
 #include <Imath/ImathVec.h>
 
+#include <optional>
 #include <string>
 
 #include "ssgi/image.h"
@@ -22,14 +23,19 @@ struct Camera {
   // display window's top-left corner, so the window spans [0, W] x [0, H]). fx, fy > 0; an
   // off-centre (shifted) camera has (cx, cy) away from (W/2, H/2).
   double fx = 1, fy = 1, cx = 0, cy = 0;
-  // Whether world_to_camera is known (header matrices or sidecar); a --fov camera has none,
+  // Whether world_to_camera is known (header matrices, sidecar, or a fit to the position
+  // pass); a --fov camera has none,
   // and then world-space inputs (normals, env maps) are taken as camera-space.
   bool has_world_transform = false;
   // Imath's row-vector convention, as OpenEXR headers store it: p' = p * M, translation in
   // row 3. Identity by default.
   Imath::M44d world_to_camera;
-  // Human-readable origin, e.g. "header worldToCamera/worldToNDC", "sidecar cam.json", "--fov".
+  // Human-readable origin, e.g. "header worldToCamera/worldToNDC", "sidecar cam.json", "--fov",
+  // "position pass ViewLayer.Position (fit, residual 0.004 px)".
   std::string source;
+  // For a camera fitted to the frame's world position pass: the fit's RMS reprojection error
+  // in pixels. Empty for every other source.
+  std::optional<double> fit_residual_px;
 
   // Horizontal field of view over `display_width` pixels, in degrees.
   double hfov_deg(int display_width) const;

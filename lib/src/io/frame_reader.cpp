@@ -4,14 +4,17 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <functional>
 #include <iterator>
 #include <limits>
 #include <map>
 #include <memory>
+#include <optional>
 #include <regex>
 
+#include "io/camera_fit.h"
 #include "io/camera_header.h"
 #include "io/input_frame.h"
 #include "io/oiio_files.h"
@@ -122,15 +125,150 @@ std::size_t sanitize(Image* image) {
   return count;
 }
 
-Camera find_camera(const InputOptions& options, const OIIO::ImageSpec& spec, int frame,
-                   const Box2i& display, double pixel_aspect, const std::string& path) {
+// Reads the channels of `targets` of one subimage into their planes (the frame's data window).
+using FillChannels =
+    std::function<void(int subimage, const std::vector<detail::PlaneTarget>& targets)>;
+
+// A frame's channels: their names per subimage, and how to read them.
+struct FrameChannels {
+  const std::vector<std::vector<std::string>>& names;
+  const FillChannels& fill;
+};
+
+// Per subimage, the names of channels to read and the planes they go to.
+using NamedPlanes = std::map<int, std::vector<std::pair<std::string, float*>>>;
+
+// Reads `planes` through `fill`, each subimage's channels found by name among
+// `channel_names[subimage]`. Throws Error(kInput) naming `path` when a subimage or a channel
+// is not there.
+void fill_named_planes(const NamedPlanes& planes, const FrameChannels& channels,
+                       const std::string& path) {
+  const std::vector<std::vector<std::string>>& channel_names = channels.names;
+  for (const auto& [subimage, names] : planes) {
+    if (subimage < 0 || subimage >= static_cast<int>(channel_names.size()))
+      throw_input(path, "has no subimage " + std::to_string(subimage));
+    const std::vector<std::string>& present = channel_names[subimage];
+    std::vector<detail::PlaneTarget> targets;
+    for (const auto& [name, plane] : names) {
+      const auto it = std::find(present.begin(), present.end(), name);
+      if (it == present.end()) throw_input(path, "has no channel '" + name + "'");
+      targets.push_back({static_cast<int>(it - present.begin()), plane});
+    }
+    // A part with a data window of its own (Nuke writes each part's bounding box) gives its
+    // pixels where they fall in the frame's window, 0 elsewhere, as OpenEXR reads pixels
+    // outside a data window.
+    channels.fill(subimage, targets);
+  }
+}
+
+// The name of the position pass in messages: its layer ("ViewLayer.Position"), else its
+// channels.
+std::string position_pass_name(const SequenceInfo& seq) {
+  const std::vector<ChannelRef>& refs = seq.layout.channels(Role::kPosition);
+  const std::string& first = refs.front().name;
+  const std::size_t dot = first.rfind('.');
+  if (dot != std::string::npos && dot > 0) return first.substr(0, dot);
+  const std::string& part = seq.channels.subimage_names[refs.front().subimage];
+  if (!part.empty()) return part;
+  std::string names;
+  for (const ChannelRef& r : refs) names += (names.empty() ? "" : ",") + r.name;
+  return names;
+}
+
+// A frame's position pass and where its surfaces are, read for the camera fit or the check of a
+// header camera against it: positions (X, Y, Z) and a distance along the view (the stored depth
+// in its kind's sense: planar or radial, any unit), +inf where the depth says background.
+struct PositionPlanes {
+  Image position, distance;
+};
+
+PositionPlanes read_position_planes(const SequenceInfo& seq, const FrameChannels& channels,
+                                    const std::string& path) {
+  const int w = seq.data_window.width(), h = seq.data_window.height();
+  PositionPlanes p{Image(w, h, 3), Image(w, h, 1)};
+  NamedPlanes planes;
+  const std::vector<ChannelRef>& pos = seq.layout.channels(Role::kPosition);
+  for (int c = 0; c < 3; ++c)
+    planes[pos[c].subimage].emplace_back(pos[c].name, p.position.plane(c));
+  const ChannelRef& depth = seq.layout.channels(Role::kDepth).front();
+  planes[depth.subimage].emplace_back(depth.name, p.distance.plane(0));
+  fill_named_planes(planes, channels, path);
+  const LayoutPreset& preset = seq.layout.preset;
+  const float inf = std::numeric_limits<float>::infinity();
+  for (float& d : p.distance.data()) {
+    double z = d;
+    if (preset.depth_kind == DepthKind::kNegativeZ) z = -z;
+    if (preset.depth_kind == DepthKind::kInverseZ) z = z > 0 ? 1 / z : inf;
+    // Radial distance is compared with the planar background as convert_depth does after
+    // turning it planar: a background written as 1e10 is far beyond either.
+    d = std::isfinite(z) && z > 0 && z < preset.background_depth ? static_cast<float>(z) : inf;
+  }
+  return p;
+}
+
+// The camera of one frame: the sidecar, --fov, the header, and failing those a fit to the
+// position pass (read through `channels`; without them, or without a position pass, no camera).
+Camera find_camera(const SequenceInfo& seq, const InputOptions& options,
+                   const OIIO::ImageSpec& spec, int frame, const std::string& path,
+                   const FrameChannels* channels) {
+  const Box2i& display = seq.display_window;
   if (!options.camera.sidecar.empty())
     return detail::camera_from_sidecar(options.camera.sidecar, frame, display);
   if (options.camera.hfov_deg > 0)
-    return camera_from_fov(options.camera.hfov_deg, display, pixel_aspect);
+    return camera_from_fov(options.camera.hfov_deg, display, seq.pixel_aspect);
   if (auto camera = detail::camera_from_header(spec, display, path)) return *camera;
-  throw_input(path,
-              "no camera: the header has no worldToCamera/worldToNDC; give --fov or --camera");
+  if (!seq.layout.has(Role::kPosition) || !seq.layout.has(Role::kDepth))
+    throw_input(path,
+                "no camera: the header has no worldToCamera/worldToNDC; give --fov or --camera");
+  if (!channels)
+    throw_input(path, "no camera in the header: it is fitted to the position pass when read");
+  const PositionPlanes planes = read_position_planes(seq, *channels, path);
+  std::size_t lattice = 0;
+  const std::vector<detail::PositionSample> samples = detail::position_samples(
+      planes.position, planes.distance, display, seq.data_window, &lattice);
+  detail::CameraFitResult fit =
+      detail::fit_camera_to_positions(samples, lattice, position_pass_name(seq));
+  if (!fit.ok) throw_input(path, "no camera in the header, and its " + fit.problem);
+  return fit.camera;
+}
+
+// Where the first frame has a header camera and a position pass, warns when the two disagree
+// by more than a pixel (RMS distance of the positions, projected by the header camera, from
+// their pixel centres): a header written for another frame or resolution, or positions not in
+// world space. Silent when they agree, as in frames whose header was written from the camera
+// that rendered them, and when the positions are in the header camera's camera space.
+void check_header_camera_against_positions(const SequenceInfo& seq, const InputOptions& options,
+                                           OIIO::ImageInput& in, const std::string& path) {
+  if (!options.camera.sidecar.empty() || options.camera.hfov_deg > 0) return;
+  if (!seq.layout.has(Role::kPosition) || !seq.layout.has(Role::kDepth)) return;
+  std::optional<Camera> camera;
+  try {
+    camera = detail::camera_from_header(in.spec(), seq.display_window, path);
+  } catch (const Error&) {
+    return;  // reading the frame reports it
+  }
+  if (!camera || !camera->has_world_transform) return;
+  const FillChannels fill = [&](int subimage, const std::vector<detail::PlaneTarget>& targets) {
+    detail::read_float_channels(in, subimage, targets, seq.data_window, path);
+  };
+  const PositionPlanes planes = read_position_planes(seq, {seq.channels.channels, fill}, path);
+  const std::vector<detail::PositionSample> samples = detail::position_samples(
+      planes.position, planes.distance, seq.display_window, seq.data_window);
+  if (samples.empty()) return;
+  // A pixel: below it the two agree as closely as a filtered position pass can show.
+  constexpr double kAgreePx = 1.0;
+  const double rms = detail::reprojection_rms_px(*camera, samples, seq.display_window);
+  if (rms <= kAgreePx) return;
+  // A position pass in camera space (RenderMan's "current" space) agrees with the header's
+  // projection alone.
+  Camera camera_space = *camera;
+  camera_space.world_to_camera = Imath::M44d();
+  if (detail::reprojection_rms_px(camera_space, samples, seq.display_window) <= kAgreePx) return;
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g", rms);
+  log_warning(path + ": the header camera (" + camera->source + ") and the position pass " +
+              position_pass_name(seq) + " disagree by " + text +
+              " px RMS; the header camera is used");
 }
 
 // What the depth conversion found, for the warning about frames without surfaces.
@@ -338,6 +476,10 @@ std::string corners(const Box2i& b) {
          std::to_string(b.x1 - 1) + "," + std::to_string(b.y1 - 1) + ")";
 }
 
+// open_sequence; with `check_header_camera`, the first frame's header camera is checked against
+// its position pass (not for a --context, whose cameras must be the input's).
+SequenceInfo open_sequence(const InputOptions& options, bool check_header_camera);
+
 // --context: the whole picture's frames, probed from the one matching `seq`'s first frame with
 // the same reading options; its frames are `seq`'s. Throws Error(kInput) naming the context's
 // file when its display window is not `seq`'s or its data window does not hold `seq`'s.
@@ -350,7 +492,7 @@ std::shared_ptr<const SequenceInfo> open_context(const SequenceInfo& seq,
   c.skip_missing = false;
   std::shared_ptr<SequenceInfo> context;
   try {
-    context = std::make_shared<SequenceInfo>(open_sequence(c));
+    context = std::make_shared<SequenceInfo>(open_sequence(c, false));
   } catch (const Error& e) {
     throw Error(e.kind(), e.file(),
                 "--context: " + std::string(e.what()) + " (the input's first frame is " +
@@ -360,7 +502,8 @@ std::shared_ptr<const SequenceInfo> open_context(const SequenceInfo& seq,
   // The same shot's frames have the same passes.
   for (int r = 0; r < kRoleCount; ++r) {
     const Role role = static_cast<Role>(r);
-    // Positions are never read; normals from depth need none.
+    // Positions are read only to fit a camera, which the context's frames do on their own;
+    // normals from depth need none.
     if (role == Role::kPosition || (role == Role::kNormal && seq.normals_from_depth)) continue;
     if (seq.layout.has(role) && !context->layout.has(role))
       throw_input(first, std::string("--context: has no ") + role_name(role) +
@@ -378,9 +521,7 @@ std::shared_ptr<const SequenceInfo> open_context(const SequenceInfo& seq,
   return context;
 }
 
-}  // namespace
-
-SequenceInfo open_sequence(const InputOptions& options) {
+SequenceInfo open_sequence(const InputOptions& options, bool check_header_camera) {
   SequenceInfo seq;
   std::vector<int> frames_in_name;
   seq.pattern = parse_sequence_pattern(options.pattern, &frames_in_name);
@@ -467,14 +608,13 @@ SequenceInfo open_sequence(const InputOptions& options) {
       options.normals == "depth" || (options.normals != "pass" && !seq.layout.has(Role::kNormal));
   if (seq.layout.preset.normal_space == NormalSpace::kWorld && !seq.normals_from_depth) {
     try {
-      if (!find_camera(options, spec, seq.frames.front(), seq.display_window, seq.pixel_aspect,
-                       first)
-               .has_world_transform)
+      if (!find_camera(seq, options, spec, seq.frames.front(), first, nullptr).has_world_transform)
         log_warning(first +
                     ": normals are in world space but the camera has no world transform "
                     "(--fov, or a sidecar without worldToCamera): they are taken as camera-space");
     } catch (const Error&) {
-      // No camera at all: reading the frame reports it.
+      // No camera in the header (fitted to the position pass, which gives a world transform)
+      // or none at all: reading the frame reports it.
     }
   }
   if (!options.context.empty()) {
@@ -487,20 +627,25 @@ SequenceInfo open_sequence(const InputOptions& options) {
                    std::back_inserter(both));
     seq.frames_on_disk = std::move(both);
   }
+  if (check_header_camera) check_header_camera_against_positions(seq, options, *in, first);
   return seq;
 }
+
+}  // namespace
+
+SequenceInfo open_sequence(const InputOptions& options) { return open_sequence(options, true); }
 
 Camera read_camera(const SequenceInfo& seq, int frame, const InputOptions& options) {
   const std::string path = seq.pattern.path_for(frame);
   auto in = open_exr(path);
-  return find_camera(options, in->spec(), frame, seq.display_window, seq.pixel_aspect, path);
+  const FillChannels fill = [&](int subimage, const std::vector<detail::PlaneTarget>& targets) {
+    detail::read_float_channels(*in, subimage, targets, seq.data_window, path);
+  };
+  const FrameChannels channels{seq.channels.channels, fill};
+  return find_camera(seq, options, in->spec(), frame, path, &channels);
 }
 
 namespace {
-
-// Reads the channels of `targets` of one subimage into their planes (the frame's data window).
-using FillChannels =
-    std::function<void(int subimage, const std::vector<detail::PlaneTarget>& targets)>;
 
 // The G-buffer of `roles` from `input`'s headers, its planes filled by `fill` (from the file or
 // from the kept pixels) and converted to the library's conventions. With `report`, what the
@@ -518,7 +663,12 @@ GBuffer convert_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
   g.frame = frame;
   g.display_window = seq.display_window;
   g.data_window = seq.data_window;
-  g.camera = find_camera(options, spec, frame, seq.display_window, seq.pixel_aspect, path);
+  std::vector<std::vector<std::string>> channel_names;
+  for (const detail::DecodedInput::Part& part : input.parts)
+    channel_names.push_back(part.spec.channelnames);
+  const FrameChannels frame_channels{channel_names, fill};
+  g.camera = find_camera(seq, options, spec, frame, path, &frame_channels);
+  if (report) log_info(path + ": camera from " + g.camera.source);
   const int w = g.width(), h = g.height();
 
   // Each role's planes, allocated once and read into straight from the file's strips (no
@@ -533,7 +683,7 @@ GBuffer convert_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
     return static_cast<int>(seq.layout.channels(role).size());
   };
   Image motion_xy, motion_zw;
-  std::map<int, std::vector<std::pair<std::string, float*>>> by_subimage;
+  NamedPlanes by_subimage;
   const auto target = [&](Role role, Image* image, int first, int count) {
     const std::vector<ChannelRef>& refs = seq.layout.channels(role);
     for (int c = 0; c < count; ++c)
@@ -570,21 +720,7 @@ GBuffer convert_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
     if (n < 4) std::fill_n(g.beauty.plane(n), g.beauty.plane_size(), 1.0f);
     target(Role::kBeauty, &g.beauty, 0, n);
   }
-  for (const auto& [subimage, names] : by_subimage) {
-    if (subimage < 0 || subimage >= static_cast<int>(input.parts.size()))
-      throw_input(path, "has no subimage " + std::to_string(subimage));
-    const std::vector<std::string>& present = input.parts[subimage].spec.channelnames;
-    std::vector<detail::PlaneTarget> targets;
-    for (const auto& [name, plane] : names) {
-      const auto it = std::find(present.begin(), present.end(), name);
-      if (it == present.end()) throw_input(path, "has no channel '" + name + "'");
-      targets.push_back({static_cast<int>(it - present.begin()), plane});
-    }
-    // A part with a data window of its own (Nuke writes each part's bounding box) gives its
-    // pixels where they fall in the frame's window, 0 elsewhere, as OpenEXR reads pixels
-    // outside a data window.
-    fill(subimage, targets);
-  }
+  fill_named_planes(by_subimage, frame_channels, path);
 
   std::size_t non_finite = 0;
   if (roles & role_bit(Role::kDepth)) {
