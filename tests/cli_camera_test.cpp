@@ -2,7 +2,6 @@
 // EXR as Blender writes it (no camera in the header), a fisheye's positions (refused), a header
 // camera that disagrees with the positions (warned about), and the Cycles sample data with its
 // header cameras stripped.
-#include <cmath>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -13,25 +12,6 @@ namespace cli_test {
 namespace {
 
 const std::string kSharedData = SSGI_SHARED_DATA_DIR;
-
-// RMSE of `a`'s indirect light against `b`'s over surface pixels (input depth below 1e9),
-// divided by the mean of `b`'s: the relRMSE of ssgi compare --metric relrmse.
-double IndirectRelRmse(const ExrImage& a, const ExrImage& b, const std::string& depth_channel) {
-  const std::vector<float>& depth = b.planes.at(depth_channel);
-  double squared = 0, sum = 0;
-  std::size_t n = 0;
-  for (const char* c : {"indirect.R", "indirect.G", "indirect.B"}) {
-    const std::vector<float>& pa = a.planes.at(c);
-    const std::vector<float>& pb = b.planes.at(c);
-    for (std::size_t i = 0; i < depth.size(); ++i) {
-      if (!(depth[i] < 1e9f)) continue;
-      squared += (pa[i] - pb[i]) * static_cast<double>(pa[i] - pb[i]);
-      sum += pb[i];
-      ++n;
-    }
-  }
-  return std::sqrt(squared / n) / (sum / n);
-}
 
 TEST_F(Cli, BlenderFrameWithoutCameraGetsItFromItsPositionPass) {
   // The sample's frame 1 as Blender writes it (world normals, a Position pass, no camera in the

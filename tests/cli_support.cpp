@@ -5,6 +5,7 @@
 #include <spawn.h>
 #include <sys/wait.h>
 
+#include <cmath>
 #include <iterator>
 
 extern char** environ;
@@ -100,6 +101,23 @@ void write_exr(const std::string& path, const ExrImage& image) {
 std::string file_bytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+double IndirectRelRmse(const ExrImage& a, const ExrImage& b, const std::string& depth_channel) {
+  const std::vector<float>& depth = b.planes.at(depth_channel);
+  double squared = 0, sum = 0;
+  std::size_t n = 0;
+  for (const char* c : {"indirect.R", "indirect.G", "indirect.B"}) {
+    const std::vector<float>& pa = a.planes.at(c);
+    const std::vector<float>& pb = b.planes.at(c);
+    for (std::size_t i = 0; i < depth.size(); ++i) {
+      if (!(depth[i] < 1e9f)) continue;
+      squared += (pa[i] - pb[i]) * static_cast<double>(pa[i] - pb[i]);
+      sum += pb[i];
+      ++n;
+    }
+  }
+  return std::sqrt(squared / n) / (sum / n);
 }
 
 }  // namespace cli_test

@@ -61,6 +61,10 @@ void write_exr(const std::string& path, const ExrImage& image);
 
 std::string file_bytes(const std::string& path);
 
+// RMSE of `a`'s indirect light against `b`'s over surface pixels (input depth below 1e9),
+// divided by the mean of `b`'s: the relRMSE of ssgi compare --metric relrmse.
+double IndirectRelRmse(const ExrImage& a, const ExrImage& b, const std::string& depth_channel);
+
 inline const std::vector<std::string> kOurChannels = {
     "R",          "G",    "B",    "A",    "indirect.R", "indirect.G",
     "indirect.B", "gi.R", "gi.G", "gi.B", "coverage.Y"};
