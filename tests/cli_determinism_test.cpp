@@ -223,7 +223,8 @@ TEST_F(Cli, EverySimdTargetGivesTheSameBits) {
     }
   }
   std::string list;
-  for (const std::string& t : report["simd"]["available"]) list += (list.empty() ? "" : ", ") + t;
+  for (const auto& t : report["simd"]["available"])
+    list += (list.empty() ? "" : ", ") + t.get<std::string>();
   expect_usage_error(
       bad_env, "info",
       "SSGI_SIMD: SIMD target 'avx9' is not one this CPU and build have (" + list + ")");

@@ -71,7 +71,9 @@ TEST_F(Cli, ExtremeSizesRunAndStayFinite) {
       EXPECT_EQ(out.spec.width, size.w);
       const LayerCheck check = check_our_layers(out, "indirect.");
       EXPECT_TRUE(check.finite) << name;
-      if (black_misses) EXPECT_EQ(check.brightest > 0, size.lit) << name;
+      if (black_misses) {
+        EXPECT_EQ(check.brightest > 0, size.lit) << name;
+      }
     }
   }
 }
