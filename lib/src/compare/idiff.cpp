@@ -18,23 +18,22 @@ Box2i union_of(const Box2i& a, const Box2i& b) {
   return {std::min(a.x0, b.x0), std::min(a.y0, b.y0), std::max(a.x1, b.x1), std::max(a.y1, b.y1)};
 }
 
-// The image as OIIO holds it: interleaved floats over its data window, with `channels` channels
-// (those past its own are 0, as idiff reads a file with fewer channels).
-OIIO::ImageBuf image_buf(const WindowedImage& image, int channels) {
+// The image as OIIO reads it: interleaved floats over its data window, with `channels` channels
+// (those past its own are 0, as idiff reads a file with fewer channels), in `pixels`, which the
+// returned buffer wraps without a copy of its own.
+OIIO::ImageBuf image_buf(const WindowedImage& image, int channels, std::vector<float>* pixels) {
   OIIO::ImageSpec spec(image.window.width(), image.window.height(), channels,
                        OIIO::TypeDesc::FLOAT);
   spec.x = image.window.x0;
   spec.y = image.window.y0;
-  std::vector<float> pixels(spec.image_pixels() * static_cast<std::size_t>(channels), 0.0f);
+  pixels->assign(spec.image_pixels() * static_cast<std::size_t>(channels), 0.0f);
   const int own = image.pixels.channels();
   const std::size_t n = image.pixels.plane_size();
   for (int c = 0; c < std::min(own, channels); ++c) {
     const float* plane = image.pixels.plane(c);
-    for (std::size_t p = 0; p < n; ++p) pixels[p * channels + c] = plane[p];
+    for (std::size_t p = 0; p < n; ++p) (*pixels)[p * channels + c] = plane[p];
   }
-  OIIO::ImageBuf buf(spec);
-  buf.set_pixels(OIIO::ROI::All(), OIIO::TypeDesc::FLOAT, pixels.data());
-  return buf;
+  return OIIO::ImageBuf(spec, pixels->data());
 }
 
 }  // namespace
@@ -52,7 +51,8 @@ IdiffStats idiff_compare(const WindowedImage& a, const WindowedImage& b,
     return result;
   }
   const int channels = std::max(a.pixels.channels(), b.pixels.channels());
-  const OIIO::ImageBuf A = image_buf(a, channels), B = image_buf(b, channels);
+  std::vector<float> a_pixels, b_pixels;
+  const OIIO::ImageBuf A = image_buf(a, channels, &a_pixels), B = image_buf(b, channels, &b_pixels);
   const OIIO::ROI region(roi.x0, roi.x1, roi.y0, roi.y1, 0, 1, 0, channels);
   const OIIO::ImageBufAlgo::CompareResults r =
       OIIO::ImageBufAlgo::compare(A, B, thresholds.fail, thresholds.warn, thresholds.fail_relative,
