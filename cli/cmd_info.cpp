@@ -44,6 +44,9 @@ struct Report {
     std::string error;
   };
   std::vector<FrameCamera> cameras;
+  // The first frame's normal pass and the space it is read in (GBuffer::normals_source); empty
+  // when the normals come from the depth or the frame could not be read.
+  std::string normals;
   std::string preset;                                         // --preset, resolved
   std::vector<std::pair<std::string, std::string>> settings;  // with the options applied
   std::optional<ssgi::Plan> plan;
@@ -125,6 +128,8 @@ void print_json(const ssgi::InputOptions& in, const ssgi::SequenceInfo& seq, con
         {"direct_includes_albedo", preset.direct_includes_albedo},
         {"channels", channels}}},
       {"cameras", cameras},
+      {"normals", r.normals.empty() ? Json(nullptr)
+                                    : Json({{"frame", seq.frames.front()}, {"source", r.normals}})},
       {"preset", r.preset},
       {"settings", settings},
       {"threads", {{"count", r.threads.threads}, {"from", r.threads.source}}},
@@ -153,10 +158,12 @@ void print_text(const ssgi::InputOptions& in, const ssgi::SequenceInfo& seq, con
   if (!layout.detected_because.empty())
     std::printf("               %s\n", layout.detected_because.c_str());
   std::printf(
-      "conventions:   depth %s, background >= %g; normals in %s space; direct light %s "
-      "albedo\n",
+      "conventions:   depth %s, background >= %g; %s; direct light %s albedo\n",
       ssgi::depth_kind_name(preset.depth_kind), preset.background_depth,
-      ssgi::normal_space_name(preset.normal_space),
+      preset.normal_space == ssgi::NormalSpace::kAuto
+          ? "normals' space decided per frame by the depth"
+          : (std::string("normals in ") + ssgi::normal_space_name(preset.normal_space) + " space")
+                .c_str(),
       preset.direct_includes_albedo ? "includes" : "excludes");
   std::printf("channels:\n");
   for (int k = 0; k < ssgi::kRoleCount; ++k) {
@@ -173,6 +180,8 @@ void print_text(const ssgi::InputOptions& in, const ssgi::SequenceInfo& seq, con
     else
       std::printf("  frame %-6d none: %s\n", c.frame, c.error.c_str());
   }
+  if (!r.normals.empty())
+    std::printf("normals:       frame %d: %s\n", seq.frames.front(), r.normals.c_str());
   std::printf("settings (preset %s):\n", r.preset.c_str());
   for (const auto& [name, value] : r.settings)
     std::printf("  %-14s %s\n", name.c_str(), value.c_str());
@@ -250,6 +259,18 @@ int run_info(int argc, char** argv) {
       r.cameras.push_back({f, ssgi::read_camera(seq, f, in), {}});
     } catch (const ssgi::Error& e) {
       r.cameras.push_back({f, std::nullopt, e.what()});
+      if (!r.problem) r.problem = e;
+    }
+  }
+  if (seq.layout.has(ssgi::Role::kNormal) && !seq.normals_from_depth && !r.cameras.empty() &&
+      r.cameras.front().camera) {
+    // The first frame's normals as run reads them: the space is the layout's or, for auto, the
+    // one that agrees with the depth.
+    try {
+      const ssgi::RoleMask roles =
+          ssgi::role_bit(ssgi::Role::kDepth) | ssgi::role_bit(ssgi::Role::kNormal);
+      r.normals = ssgi::read_gbuffer(seq, seq.frames.front(), roles, in).normals_source;
+    } catch (const ssgi::Error& e) {
       if (!r.problem) r.problem = e;
     }
   }

@@ -51,6 +51,10 @@ const std::vector<OptionSpec> kTable = {
      "planar, radial, inverse or negative (default: the layout's)", nullptr},
     {kNormals, "normals", 0, "SOURCE", OptionGroup::kInput, kReading,
      "auto (the file's normals, else from depth), pass or depth (from the depth buffer)", nullptr},
+    {kNormalSpace, "normal-space", 0, "SPACE", OptionGroup::kInput, kReading,
+     "the normal pass's space: world, camera (+z forward), camera-gl (-z forward) or auto (the "
+     "one that agrees with the depth; default: the layout's)",
+     nullptr},
     {kFov, "fov", 0, "DEGREES", OptionGroup::kInput, kReading,
      "a static camera with this horizontal field of view", nullptr},
     {kCamera, "camera", 0, "FILE.json", OptionGroup::kInput, kReading,

@@ -33,6 +33,7 @@ enum OptionId : int {
   kChannel,
   kDepthKind,
   kNormals,
+  kNormalSpace,
   kFov,
   kCamera,
   kContext,

@@ -148,6 +148,9 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
       case kNormals:
         in.normals = a;
         break;
+      case kNormalSpace:
+        in.normal_space = a;
+        break;
       case kFov: {
         in.camera.hfov_deg = parse_double("fov", a);
         // Below 1e-6 degrees the focal length in pixels no longer fits a float.

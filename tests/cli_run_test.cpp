@@ -599,14 +599,18 @@ TEST_F(Cli, PassesSpreadOverPartsWithTheirOwnDataWindowsRun) {
 }
 
 TEST_F(Cli, FrameWithoutSurfacesWarnsAndSaysWhy) {
-  // Positive depth read as negative: every pixel is background. One warning for the frame,
-  // naming it and the likely cause.
+  // Positive depth read as negative: every pixel is background. The position pass says which
+  // kind the depth is, and the frame gets one warning naming it and the likely cause.
   const CliResult r = run_ssgi({"run", testdata("sample/sample.0001.exr"), "-o", path("o.exr"),
                                 "--rays", "2", "--temporal", "none", "--depth-kind", "negative"});
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::vector<std::string> lines = r.err_lines();
-  ASSERT_EQ(lines.size(), 3u) << r.err;  // the warning, the progress line, the summary
-  EXPECT_EQ(lines[0], "ssgi: warning: " + testdata("sample/sample.0001.exr") + ": 0 of 6144 " +
+  ASSERT_EQ(lines.size(), 4u) << r.err;  // two warnings, the progress line, the summary
+  EXPECT_EQ(lines[0], "ssgi: warning: " + testdata("sample/sample.0001.exr") +
+                          ": ViewLayer.Depth.Z holds planar depth by the position pass " +
+                          "ViewLayer.Position (5976 of 5976 pixels), not negative: give " +
+                          "--depth-kind planar");
+  EXPECT_EQ(lines[1], "ssgi: warning: " + testdata("sample/sample.0001.exr") + ": 0 of 6144 " +
                           "pixels have a surface, the rest get no GI: its depths are positive " +
                           "but --depth-kind is negative");
   // The right kind: no warning.

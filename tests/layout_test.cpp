@@ -114,6 +114,14 @@ TEST(LayoutNames, DepthKindsRoundTrip) {
   EXPECT_FALSE(parse_depth_kind("linear", &parsed));
   EXPECT_STREQ(normal_space_name(NormalSpace::kWorld), "world");
   EXPECT_STREQ(normal_space_name(NormalSpace::kCamera), "camera");
+  for (NormalSpace s :
+       {NormalSpace::kWorld, NormalSpace::kCamera, NormalSpace::kCameraGl, NormalSpace::kAuto}) {
+    NormalSpace read;
+    ASSERT_TRUE(parse_normal_space(normal_space_name(s), &read)) << normal_space_name(s);
+    EXPECT_EQ(read, s);
+  }
+  NormalSpace read;
+  EXPECT_FALSE(parse_normal_space("object", &read));
 }
 
 TEST(LayoutPresets, TableHasEveryRendererAndCitesIt) {
@@ -279,7 +287,8 @@ TEST(LayoutDetect, VRay) {
   EXPECT_EQ(names(l, Role::kBeauty), (Names{"R", "G", "B", "A"}));
   EXPECT_FALSE(l.has(Role::kPosition));
   EXPECT_FALSE(l.preset.direct_includes_albedo);
-  EXPECT_EQ(l.preset.normal_space, NormalSpace::kCamera);
+  // Camera space, on axes V-Ray does not document: decided per frame.
+  EXPECT_EQ(l.preset.normal_space, NormalSpace::kAuto);
   EXPECT_NE(l.detected_because.find("vrayInfo/vrayversion"), std::string::npos);
 }
 
@@ -501,7 +510,7 @@ TEST(LayoutOverrides, ArbitraryNamesResolveToCustom) {
   EXPECT_EQ(names(l, Role::kBeauty), (Names{"R", "G", "B", "A"}));
   EXPECT_FALSE(l.has(Role::kMotion));
   EXPECT_EQ(l.preset.depth_kind, DepthKind::kPlanarZ);
-  EXPECT_EQ(l.preset.normal_space, NormalSpace::kWorld);
+  EXPECT_EQ(l.preset.normal_space, NormalSpace::kAuto);
   EXPECT_FALSE(l.preset.direct_includes_albedo);
   EXPECT_NE(l.detected_because.find("no preset matched"), std::string::npos);
   EXPECT_NE(l.detected_because.find("--channel depth=dist"), std::string::npos);

@@ -9,6 +9,7 @@
 
 #include "gtest/gtest.h"
 #include "io/input_frame.h"
+#include "io/pass_agreement.h"
 #include "pipeline_support.h"
 #include "ssgi/color.h"
 

@@ -20,6 +20,10 @@ struct GBuffer {
   Box2i display_window;
   Box2i data_window;
   Camera camera;
+  // The normal pass and the space it was read in, and why (the layout, --normal-space, or its
+  // agreement with the depth's normals), e.g. "ViewLayer.Normal in world space, as the blender
+  // layout says"; empty when the normals are not read from a pass.
+  std::string normals_source;
 
   Image depth;                // 1: planar camera-space z; +inf where there is no surface
   Image normal;               // 3: unit camera-space normal; 0 where there is no surface

@@ -28,6 +28,7 @@ struct InputOptions {
   std::string layout;                          // --layout; empty: detect
   std::vector<std::string> channel_overrides;  // --channel ROLE=NAME
   std::string depth_kind;                      // --depth-kind; empty: the preset's
+  std::string normal_space;                    // --normal-space; empty: the preset's
   // --normals: "pass" (the file's normal channels), "depth" (from the depth buffer's pixel
   // derivatives), empty or "auto" (the pass when the file has one, else from depth).
   std::string normals;

@@ -41,9 +41,15 @@ const char* depth_kind_name(DepthKind kind);
 // Parses a name as above; returns false when unknown.
 bool parse_depth_kind(const std::string& name, DepthKind* kind);
 
-enum class NormalSpace { kWorld, kCamera };
-// "world", "camera".
+// The space a normal pass is in. kCamera is the library's camera space (x right, y up, +z
+// forward: RenderMan's); kCameraGl the OpenGL one the camera of Maya, Houdini and 3ds Max has
+// (x right, y up, looking down -z). kAuto: decided per frame by which space agrees with the
+// normals the depth implies.
+enum class NormalSpace { kWorld, kCamera, kCameraGl, kAuto };
+// "world", "camera", "camera-gl", "auto".
 const char* normal_space_name(NormalSpace space);
+// Parses a name as above; returns false when unknown.
+bool parse_normal_space(const std::string& name, NormalSpace* space);
 
 // How motion vectors are stored, converted by the reader to the library's convention
 // (display pixels, +y down, offset from this pixel to the same surface point in the previous
@@ -81,8 +87,8 @@ struct LayoutPreset {
   // Channels are always looked up by full name: OIIO may reorder channels inside a layer.
   std::vector<std::string> candidates[kRoleCount];
   DepthKind depth_kind = DepthKind::kPlanarZ;
-  // kCamera means the library's camera space (x right, y up, +z forward); world-space
-  // normals need the file's worldToCamera.
+  // World-space normals need the frame's world transform (header, sidecar or a fit to the
+  // position pass). kAuto where the renderer's documentation does not say.
   NormalSpace normal_space = NormalSpace::kWorld;
   bool direct_includes_albedo = false;
   // True for renderers that do not sample emissive surfaces as lights, so emission must be

@@ -18,6 +18,7 @@
 #include "io/camera_header.h"
 #include "io/input_frame.h"
 #include "io/oiio_files.h"
+#include "io/pass_agreement.h"
 #include "parallel.h"
 #include "ssgi/color.h"
 #include "ssgi/error.h"
@@ -161,10 +162,10 @@ void fill_named_planes(const NamedPlanes& planes, const FrameChannels& channels,
   }
 }
 
-// The name of the position pass in messages: its layer ("ViewLayer.Position"), else its
-// channels.
-std::string position_pass_name(const SequenceInfo& seq) {
-  const std::vector<ChannelRef>& refs = seq.layout.channels(Role::kPosition);
+// The name of a role's pass in messages: its layer ("ViewLayer.Position"), else its part, else
+// its channels.
+std::string pass_name(const SequenceInfo& seq, Role role) {
+  const std::vector<ChannelRef>& refs = seq.layout.channels(role);
   const std::string& first = refs.front().name;
   const std::size_t dot = first.rfind('.');
   if (dot != std::string::npos && dot > 0) return first.substr(0, dot);
@@ -227,7 +228,7 @@ Camera find_camera(const SequenceInfo& seq, const InputOptions& options,
   const std::vector<detail::PositionSample> samples = detail::position_samples(
       planes.position, planes.distance, display, seq.data_window, &lattice);
   detail::CameraFitResult fit =
-      detail::fit_camera_to_positions(samples, lattice, position_pass_name(seq));
+      detail::fit_camera_to_positions(samples, lattice, pass_name(seq, Role::kPosition));
   if (!fit.ok) throw_input(path, "no camera in the header, and its " + fit.problem);
   return fit.camera;
 }
@@ -267,8 +268,40 @@ void check_header_camera_against_positions(const SequenceInfo& seq, const InputO
   char text[32];
   std::snprintf(text, sizeof text, "%.3g", rms);
   log_warning(path + ": the header camera (" + camera->source + ") and the position pass " +
-              position_pass_name(seq) + " disagree by " + text +
+              pass_name(seq, Role::kPosition) + " disagree by " + text +
               " px RMS; the header camera is used");
+}
+
+// Where the first frame has a depth pass, a position pass and a camera with a world transform,
+// warns when the depth is not the kind of distance the layout says (planar or along the ray) or
+// its background value reads as a surface, by the positions.
+void check_depth_against_positions(const SequenceInfo& seq, const InputOptions& options,
+                                   OIIO::ImageInput& in, const std::string& path) {
+  if (!seq.layout.has(Role::kPosition) || !seq.layout.has(Role::kDepth)) return;
+  const FillChannels fill = [&](int subimage, const std::vector<detail::PlaneTarget>& targets) {
+    detail::read_float_channels(in, subimage, targets, seq.data_window, path);
+  };
+  const FrameChannels channels{seq.channels.channels, fill};
+  Camera camera;
+  try {
+    camera = find_camera(seq, options, in.spec(), seq.frames.front(), path, &channels);
+  } catch (const Error&) {
+    return;  // reading the frame reports it
+  }
+  if (!camera.has_world_transform) return;
+  const int w = seq.data_window.width(), h = seq.data_window.height();
+  Image position(w, h, 3), depth(w, h, 1);
+  NamedPlanes planes;
+  const std::vector<ChannelRef>& pos = seq.layout.channels(Role::kPosition);
+  for (int c = 0; c < 3; ++c) planes[pos[c].subimage].emplace_back(pos[c].name, position.plane(c));
+  const ChannelRef& depth_channel = seq.layout.channels(Role::kDepth).front();
+  planes[depth_channel.subimage].emplace_back(depth_channel.name, depth.plane(0));
+  fill_named_planes(planes, channels, path);
+  const LayoutPreset& preset = seq.layout.preset;
+  const std::string problem = detail::depth_position_mismatch(
+      depth, position, camera, preset.depth_kind, preset.background_depth, depth_channel.name,
+      pass_name(seq, Role::kPosition));
+  if (!problem.empty()) log_warning(path + ": " + problem);
 }
 
 // What the depth conversion found, for the warning about frames without surfaces.
@@ -344,6 +377,7 @@ void warn_if_no_surfaces(const DepthCounts& counts, std::size_t pixels, DepthKin
 void convert_normals(Image& normal, const Image& depth, NormalSpace space, const Camera& camera,
                      const Box2i& display, const Box2i& data) {
   const bool to_camera = space == NormalSpace::kWorld && camera.has_world_transform;
+  const bool flip_z = space == NormalSpace::kCameraGl;
   Imath::M44d inv;
   if (to_camera) inv = inverse_checked(camera.world_to_camera);
   detail::parallel_for_rows(normal.height(), [&](int y) {
@@ -358,6 +392,7 @@ void convert_normals(Image& normal, const Image& depth, NormalSpace space, const
              n.x * inv[1][0] + n.y * inv[1][1] + n.z * inv[1][2],
              n.x * inv[2][0] + n.y * inv[2][1] + n.z * inv[2][2]};
       }
+      if (flip_z) n.z = -n.z;
       const Imath::V3d view =
           camera.view_dir(x + data.x0 - display.x0 + 0.5, y + data.y0 - display.y0 + 0.5);
       const double len = std::sqrt(n.dot(n));
@@ -373,67 +408,6 @@ void convert_normals(Image& normal, const Image& depth, NormalSpace space, const
     }
   });
 }
-
-}  // namespace
-
-namespace detail {
-
-Image normals_from_depth(const Image& depth, const Camera& camera, const Box2i& display,
-                         const Box2i& data) {
-  const int w = depth.width(), h = depth.height();
-  Image normal(w, h, 3);
-  const double ox = data.x0 - display.x0 + 0.5, oy = data.y0 - display.y0 + 0.5;
-  auto point = [&](int x, int y, Imath::V3d* p) {
-    if (x < 0 || y < 0 || x >= w || y >= h) return false;
-    const float z = depth.at(0, x, y);
-    if (!std::isfinite(z)) return false;
-    *p = camera.unproject(x + ox, y + oy, z);
-    return true;
-  };
-  // A feature one pixel across: both neighbours nearer, or both farther, by more than this
-  // fraction of the pixel's depth (input_frame.h).
-  constexpr double kFeatureStep = 0.005;
-  // The difference towards the neighbour with the smaller depth step, or across a feature one
-  // pixel wide at its own depth; false when neither neighbour is a surface.
-  auto derivative = [&](const Imath::V3d& c, int x, int y, int dx, int dy, Imath::V3d* d) {
-    Imath::V3d a(0), b(0);
-    const bool has_a = point(x + dx, y + dy, &a), has_b = point(x - dx, y - dy, &b);
-    if (!has_a && !has_b) return false;
-    if (has_a && has_b && (a.z - c.z) * (b.z - c.z) > 0 &&
-        std::min(std::fabs(a.z - c.z), std::fabs(b.z - c.z)) > kFeatureStep * c.z) {
-      const Imath::V3d across = camera.unproject(x + dx + ox, y + dy + oy, c.z);
-      *d = across - c;
-      return true;
-    }
-    const bool use_a = has_a && (!has_b || std::fabs(a.z - c.z) <= std::fabs(c.z - b.z));
-    *d = use_a ? a - c : c - b;
-    return true;
-  };
-  detail::parallel_for_rows(h, [&](int y) {
-    for (int x = 0; x < w; ++x) {
-      Imath::V3d c(0);
-      if (!point(x, y, &c)) continue;
-      const Imath::V3d view = camera.view_dir(x + ox, y + oy);
-      Imath::V3d n = -view, du(0), dv(0);
-      if (derivative(c, x, y, 1, 0, &du) && derivative(c, x, y, 0, 1, &dv)) {
-        const Imath::V3d cr = du.cross(dv);
-        const double len = std::sqrt(cr.dot(cr));
-        if (len > 0 && std::isfinite(len)) {
-          n = cr / len;
-          if (n.dot(view) > 0) n = -n;
-        }
-      }
-      normal.at(0, x, y) = static_cast<float>(n.x);
-      normal.at(1, x, y) = static_cast<float>(n.y);
-      normal.at(2, x, y) = static_cast<float>(n.z);
-    }
-  });
-  return normal;
-}
-
-}  // namespace detail
-
-namespace {
 
 // Motion in the library's convention, in place: display pixels, +y down, offsets to frame -1
 // (motion_prev) and +1 (motion_next). `xy` and `zw` hold the stored channels (zw: the third
@@ -595,6 +569,10 @@ SequenceInfo open_sequence(const InputOptions& options, bool check_header_camera
       !parse_depth_kind(options.depth_kind, &seq.layout.preset.depth_kind))
     throw_usage("unknown --depth-kind '" + options.depth_kind +
                 "' (planar, radial, inverse, negative)");
+  if (!options.normal_space.empty() &&
+      !parse_normal_space(options.normal_space, &seq.layout.preset.normal_space))
+    throw_usage("unknown --normal-space '" + options.normal_space +
+                "' (auto, world, camera, camera-gl)");
   if (!options.camera.sidecar.empty() && options.camera.hfov_deg > 0)
     throw_usage("--camera and --fov both give the camera: use one");
   if (!options.normals.empty() && options.normals != "auto" && options.normals != "pass" &&
@@ -627,7 +605,10 @@ SequenceInfo open_sequence(const InputOptions& options, bool check_header_camera
                    std::back_inserter(both));
     seq.frames_on_disk = std::move(both);
   }
-  if (check_header_camera) check_header_camera_against_positions(seq, options, *in, first);
+  if (check_header_camera) {
+    check_header_camera_against_positions(seq, options, *in, first);
+    check_depth_against_positions(seq, options, *in, first);
+  }
   return seq;
 }
 
@@ -646,6 +627,27 @@ Camera read_camera(const SequenceInfo& seq, int frame, const InputOptions& optio
 }
 
 namespace {
+
+// The space `g`'s normal pass is read in: the layout's or --normal-space's, or for auto the one
+// that agrees with the normals `g`'s depth (converted already) implies. Sets g.normals_source
+// and, with `report`, warns when the space is doubtful or contradicts the depth.
+NormalSpace normal_space_of(const SequenceInfo& seq, const InputOptions& options, GBuffer& g,
+                            bool report) {
+  const LayoutPreset& preset = seq.layout.preset;
+  const std::string said_by =
+      options.normal_space.empty() ? "the " + preset.name + " layout says" : "--normal-space says";
+  detail::NormalSpaceScores scores;
+  if (!g.depth.empty())
+    scores =
+        detail::score_normal_spaces(g.normal, g.depth, g.camera, g.display_window, g.data_window);
+  const detail::NormalSpaceChoice choice = detail::choose_normal_space(
+      preset.normal_space, scores, g.camera.has_world_transform, said_by);
+  g.normals_source = pass_name(seq, Role::kNormal) + " in " + normal_space_name(choice.space) +
+                     " space, " + choice.reason;
+  if (report) log_info(g.path + ": normals " + g.normals_source);
+  if (report && !choice.warning.empty()) log_warning(g.path + ": " + choice.warning);
+  return choice.space;
+}
 
 // The G-buffer of `roles` from `input`'s headers, its planes filled by `fill` (from the file or
 // from the kept pixels) and converted to the library's conventions. With `report`, what the
@@ -732,8 +734,8 @@ GBuffer convert_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
     g.normal = detail::normals_from_depth(g.depth, g.camera, g.display_window, g.data_window);
   } else if (read_normals) {
     non_finite += sanitize(&g.normal);
-    convert_normals(g.normal, g.depth, preset.normal_space, g.camera, g.display_window,
-                    g.data_window);
+    const NormalSpace space = normal_space_of(seq, options, g, report);
+    convert_normals(g.normal, g.depth, space, g.camera, g.display_window, g.data_window);
   }
   // Light and albedo into the working space as they are read; depth, normals and motion are
   // data and stay as they are.

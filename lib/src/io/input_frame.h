@@ -34,18 +34,6 @@ GBuffer gbuffer_from_input(const SequenceInfo& sequence, int frame, RoleMask rol
                            const InputOptions& options, const ColorManagement* color,
                            const DecodedInput& input);
 
-// Unit camera-space normals facing the camera from the depth buffer's pixel derivatives: the
-// camera-space points of the pixel and its neighbours; along each axis the one-sided difference
-// with the smaller depth step (so that a depth edge does not bend the normal of the surface on
-// either side), the other side where one is background; the normal across the two, turned to
-// face the camera. A pixel with no surface neighbour on an axis faces the camera along it, and
-// so does a feature one pixel across on that axis (a rod, a blade of grass): a pixel both of
-// whose neighbours lie nearer, or both farther, by more than half a per cent of its depth, where
-// no plane can lie (its depth along a screen line is monotonic) and either difference would
-// turn the normal sideways.
-Image normals_from_depth(const Image& depth, const Camera& camera, const Box2i& display,
-                         const Box2i& data);
-
 // Copies every plane of `src`, whose pixels cover `src_window`, into `dst`, covering
 // `dst_window`, where the two windows overlap; the rest of `dst` is left as it is. Both have the
 // same number of channels.

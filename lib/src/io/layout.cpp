@@ -119,12 +119,8 @@ std::vector<PresetEntry> build_presets() {
         !parse_depth_kind(row["depth_kind"].get<std::string>(), &p.depth_kind))
       throw Error(ErrorKind::kInternal, "", "layout presets: " + p.name + ": bad depth_kind");
     if (row.contains("normals")) {
-      const std::string space = row["normals"].get<std::string>();
-      if (space != normal_space_name(NormalSpace::kWorld) &&
-          space != normal_space_name(NormalSpace::kCamera))
+      if (!parse_normal_space(row["normals"].get<std::string>(), &p.normal_space))
         throw Error(ErrorKind::kInternal, "", "layout presets: " + p.name + ": bad normals");
-      p.normal_space = space == normal_space_name(NormalSpace::kWorld) ? NormalSpace::kWorld
-                                                                       : NormalSpace::kCamera;
     }
     p.direct_includes_albedo = row.value("direct_includes_albedo", p.direct_includes_albedo);
     p.gather_emission = row.value("gather_emission", p.gather_emission);
@@ -578,7 +574,28 @@ bool parse_depth_kind(const std::string& name, DepthKind* kind) {
 }
 
 const char* normal_space_name(NormalSpace space) {
-  return space == NormalSpace::kWorld ? "world" : "camera";
+  switch (space) {
+    case NormalSpace::kWorld:
+      return "world";
+    case NormalSpace::kCamera:
+      return "camera";
+    case NormalSpace::kCameraGl:
+      return "camera-gl";
+    case NormalSpace::kAuto:
+      break;
+  }
+  return "auto";
+}
+
+bool parse_normal_space(const std::string& name, NormalSpace* space) {
+  for (NormalSpace s :
+       {NormalSpace::kWorld, NormalSpace::kCamera, NormalSpace::kCameraGl, NormalSpace::kAuto}) {
+    if (name == normal_space_name(s)) {
+      *space = s;
+      return true;
+    }
+  }
+  return false;
 }
 
 const std::vector<LayoutPreset>& layout_presets() {
