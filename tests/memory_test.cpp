@@ -197,7 +197,8 @@ std::string testdata(const std::string& relative) {
 }
 
 std::string fresh_dir(const std::string& name) {
-  const fs::path d = fs::path(testing::TempDir()) / name;
+  // The process id keeps test runs of two build trees on one machine apart.
+  const fs::path d = fs::path(testing::TempDir()) / (name + "." + std::to_string(getpid()));
   fs::remove_all(d);
   return d.string();
 }
@@ -310,7 +311,8 @@ TEST(Memory, ReadingTwiceFitsLessAndGivesTheSameBits) {
 // The sample room scaled to `width` wide (nearest neighbour: depth stays depth), written once;
 // its pattern.
 std::string scaled_sample(int width) {
-  const fs::path dir = fs::path(testing::TempDir()) / ("ssgi_memory_room_" + std::to_string(width));
+  const fs::path dir = fs::path(testing::TempDir()) / ("ssgi_memory_room_" + std::to_string(width) +
+                                                       "." + std::to_string(getpid()));
   const std::string pattern = (dir / "room.####.exr").string();
   const std::string path = (dir / "room.0001.exr").string();
   if (fs::exists(path)) return pattern;

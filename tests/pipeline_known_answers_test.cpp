@@ -3,6 +3,7 @@
 // count, crops and coarse trace grids.
 #include <OpenImageIO/imageio.h>
 #include <tbb/global_control.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -233,7 +234,9 @@ std::string write_two_tone_env(const std::string& name, float upper, float lower
       for (int c = 0; c < 3; ++c)
         pixels[(static_cast<std::size_t>(y) * w + x) * 3 + c] = y < h / 2 ? upper : lower;
   const std::string path =
-      (std::filesystem::temp_directory_path() / ("ssgi_pipeline_test_" + name + ".exr")).string();
+      (std::filesystem::temp_directory_path() /
+       ("ssgi_pipeline_test_" + name + "." + std::to_string(getpid()) + ".exr"))
+          .string();
   auto out = OIIO::ImageOutput::create(path);
   OIIO::ImageSpec spec(w, h, 3, OIIO::TypeDesc::FLOAT);
   EXPECT_TRUE(out && out->open(path, spec) &&

@@ -2,6 +2,7 @@
 #include "ssgi/sequence.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <climits>
 #include <filesystem>
@@ -389,8 +390,8 @@ TEST_F(FindFramesOnDiskTest, NothingToFind) {
 
 // What a signal handler removes: the files registered while being written, and only those.
 TEST(TemporaryFiles, RemovedWhileRegisteredAndKeptOtherwise) {
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / "ssgi_temporary_files_test";
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    ("ssgi_temporary_files_test." + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
   auto touch = [&](const std::string& name) {
     std::ofstream(dir / name) << "x";
