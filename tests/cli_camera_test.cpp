@@ -1,7 +1,12 @@
 // The command line on frames whose camera comes from their position pass: Blender's multilayer
 // EXR as Blender writes it (no camera in the header), a fisheye's positions (refused), a header
-// camera that disagrees with the positions (warned about), and the Cycles sample data with its
-// header cameras stripped.
+// camera that disagrees with the positions (warned about), the Cycles sample data with its header
+// cameras stripped, and the cameras other renderers write into their headers.
+#include <Imath/ImathMatrix.h>
+
+#include <cmath>
+#include <cstdio>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -142,6 +147,119 @@ TEST_F(Cli, CyclesFramesWithTheirHeaderCamerasStripped) {
   ASSERT_EQ(run_ssgi({"run", path("stripped.0003.exr"), "-o", path("s.exr"), "-q"}).exit_code, 0);
   EXPECT_LT(IndirectRelRmse(read_exr(path("s.exr")), read_exr(path("h.exr")), "ViewLayer.Depth.Z"),
             0.01);
+}
+
+// The header camera of frame 1 (the library's camera space: x right, y up, +z forward) and its
+// horizontal fov, from the fixture that carries it.
+struct TrueCamera {
+  Imath::M44d world_to_camera;
+  double hfov_deg = 0;
+};
+
+TrueCamera true_camera(const ExrImage& frame) {
+  const OIIO::ParamValue* m = frame.spec.find_attribute("worldToCamera");
+  const float* v = static_cast<const float*>(m->data());
+  TrueCamera c;
+  for (int i = 0; i < 16; ++i) c.world_to_camera[i / 4][i % 4] = v[i];
+  c.hfov_deg = 65;  // testdata/README.md: the sample's camera
+  return c;
+}
+
+void set_matrix(OIIO::ImageSpec& spec, const std::string& name, const Imath::M44d& m) {
+  float v[16];
+  for (int i = 0; i < 16; ++i) v[i] = static_cast<float>(m[i / 4][i % 4]);
+  spec.attribute(name, OIIO::TypeDesc::TypeMatrix44, v);
+}
+
+// A camera looking down -z where ours looks down +z: the same transform with z negated.
+const Imath::M44d kFlipZ(1, 0, 0, 0, 0, 1, 0, 0, 0, 0, -1, 0, 0, 0, 0, 1);
+
+// Frame 1 with its camera as each renderer writes it into its header, in that renderer's own
+// attribute names and conventions (camera_header.cpp), and no OpenEXR camera: the camera read
+// back is the true one, so the position pass agrees with it (no warning) and the light is the
+// true camera's.
+TEST_F(Cli, RenderersOwnHeaderCamerasAreRead) {
+  const ExrImage source = read_exr(testdata("asrendered/header.0001.exr"));
+  const TrueCamera truth = true_camera(source);
+  const Imath::M44d camera_to_world = truth.world_to_camera.inverse();
+  const double kRad = 3.14159265358979323846 / 180;
+  ASSERT_EQ(run_ssgi({"run", testdata("asrendered/header.0001.exr"), "-o", path("true.exr"), "-q"})
+                .exit_code,
+            0);
+  const ExrImage reference = read_exr(path("true.exr"));
+
+  struct Renderer {
+    std::string name, source;
+    std::function<void(ExrImage&)> write;
+  };
+  const std::vector<Renderer> renderers = {
+      {"vray", "header V-Ray cameraTransform/cameraFov",
+       [&](ExrImage& f) {
+         // Camera-to-world of a camera looking down -Z, its translation in the last column.
+         Imath::M44d t = (kFlipZ * camera_to_world).transposed();
+         set_matrix(f.spec, "cameraTransform", t);
+         f.spec.attribute("cameraFov", static_cast<float>(truth.hfov_deg));
+         f.spec.attribute("cameraProjection", 0);
+       }},
+      {"arnold", "header Arnold worldToCamera/CameraFov",
+       [&](ExrImage& f) {
+         set_matrix(f.spec, "worldToCamera", truth.world_to_camera * kFlipZ);
+         f.spec.attribute("CameraFov", static_cast<float>(truth.hfov_deg));
+       }},
+      {"redshift", "header Redshift rs/camera/transform/fov",
+       [&](ExrImage& f) {
+         set_matrix(f.spec, "rs/camera/transform", camera_to_world);
+         f.spec.attribute("rs/camera/fov", static_cast<float>(truth.hfov_deg * kRad));
+         f.spec.attribute("rs/camera/shift", OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, 2),
+                          std::vector<float>{0, 0}.data());
+       }},
+      {"unreal", "header Unreal unreal/camera/curPos/curRot/FinalImage/fov",
+       [&](ExrImage& f) {
+         // Unreal's world is left-handed: the scene mirrored in y, positions and normals with
+         // it, so that the camera is a rotation there, given as pitch, yaw and roll.
+         const Imath::M44d mirror(1, 0, 0, 0, 0, -1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1);
+         for (const char* axis : {"ViewLayer.Position.Y", "ViewLayer.Normal.Y"})
+           for (float& v : f.planes.at(axis)) v = -v;
+         const Imath::M44d c2w = camera_to_world * mirror;  // rows: right, up, forward, eye
+         const Imath::V3d right(c2w[0][0], c2w[0][1], c2w[0][2]);
+         const Imath::V3d up(c2w[1][0], c2w[1][1], c2w[1][2]);
+         const Imath::V3d forward(c2w[2][0], c2w[2][1], c2w[2][2]);
+         const double pitch = std::asin(forward.z) / kRad;
+         const double yaw = std::atan2(forward.y, forward.x) / kRad;
+         const double roll = std::atan2(-right.z, up.z) / kRad;
+         const auto text = [](double v) {
+           char buf[40];
+           std::snprintf(buf, sizeof buf, "%.9g", v);
+           return std::string(buf);
+         };
+         f.spec.attribute("unreal/camera/curPos/x", text(c2w[3][0]));
+         f.spec.attribute("unreal/camera/curPos/y", text(c2w[3][1]));
+         f.spec.attribute("unreal/camera/curPos/z", text(c2w[3][2]));
+         f.spec.attribute("unreal/camera/curRot/pitch", text(pitch));
+         f.spec.attribute("unreal/camera/curRot/yaw", text(yaw));
+         f.spec.attribute("unreal/camera/curRot/roll", text(roll));
+         f.spec.attribute("unreal/camera/FinalImage/fov", text(truth.hfov_deg));
+       }},
+  };
+  for (const Renderer& r : renderers) {
+    SCOPED_TRACE(r.name);
+    ExrImage frame = source;
+    frame.spec.erase_attribute("worldToCamera");
+    frame.spec.erase_attribute("worldToNDC");
+    r.write(frame);
+    const std::string file = path(r.name + ".0001.exr");
+    write_exr(file, frame);
+    const CliResult info = run_ssgi({"info", file, "--json"});
+    ASSERT_EQ(info.exit_code, 0) << info.err;
+    EXPECT_EQ(info.err, "");  // the header camera and the position pass agree
+    const nlohmann::json c = nlohmann::json::parse(info.out)["cameras"][0];
+    EXPECT_EQ(c["source"], r.source);
+    EXPECT_NEAR(c["hfov_deg"].get<double>(), truth.hfov_deg, 1e-4);
+    const CliResult run = run_ssgi({"run", file, "-o", path(r.name + ".exr"), "-q"});
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    EXPECT_LT(IndirectRelRmse(read_exr(path(r.name + ".exr")), reference, "ViewLayer.Depth.Z"),
+              0.02);
+  }
 }
 
 }  // namespace

@@ -1,5 +1,5 @@
-// Cameras from EXR header attributes (OpenEXR standard, Nuke, V-Ray, Arnold) and from JSON
-// sidecar files.
+// Cameras from EXR header attributes (OpenEXR standard, Nuke, V-Ray, Arnold, Redshift, Unreal)
+// and from JSON sidecar files.
 #include "io/camera_header.h"
 
 #include <cmath>
@@ -233,6 +233,100 @@ std::optional<Camera> arnold_camera(const OIIO::ImageSpec& spec, const Box2i& di
                   world_to_camera ? "Arnold worldToCamera/CameraFov" : "Arnold CameraFov");
 }
 
+// Redshift (from 2.6.04 and 2.5.64; Maxon, "EXR Metadata") writes rs/camera/transform, the
+// camera-to-world matrix with its translation in the last row as Imath stores it (Nuke tools
+// that rebuild the camera read elements 12 to 14 as the position; a string of 16 numbers in some
+// files), rs/camera/fov ("the fov in radians" by Maxon's page; some tools read degrees, so a
+// value above pi is taken as degrees), rs/camera/aperture, rs/camera/shift and rs/camera/aspect;
+// builds before those wrote RSCameraTransform and RSCameraFOV. The camera's local axes are
+// +Y up, +Z forward (the Nuke tools flip Z to turn it into Nuke's camera, which looks down -Z).
+// A lens shift has no documented unit: a camera with one is not read from the header (the
+// position pass, when there is one, gives it).
+std::optional<Camera> redshift_camera(const OIIO::ImageSpec& spec, const Box2i& display,
+                                      const std::string& file) {
+  std::optional<double> fov = number_attr(spec, "rs/camera/fov");
+  if (!fov) fov = number_attr(spec, "RSCameraFOV");
+  if (!fov) return std::nullopt;
+  if (const OIIO::ParamValue* p = find_attr(spec, "rs/camera/shift")) {
+    for (double v : numbers_of(*p))
+      if (v != 0) return std::nullopt;
+  }
+  const double degrees = *fov > kPi ? *fov : *fov * 180 / kPi;
+  std::optional<Imath::M44d> transform = matrix_attr(spec, "rs/camera/transform", file);
+  if (!transform) transform = matrix_attr(spec, "RSCameraTransform", file);
+  std::optional<Imath::M44d> world_to_local;
+  if (transform) {
+    try {
+      world_to_local = inverse_checked(*transform);
+    } catch (const Error& e) {
+      throw_input(file, std::string("Redshift rs/camera/transform: ") + e.what());
+    }
+  }
+  return from_fov(degrees, world_to_local, Imath::M44d(), spec, display, file,
+                  transform ? "Redshift rs/camera/transform/fov" : "Redshift rs/camera/fov");
+}
+
+// Unreal Engine's Movie Render Queue writes the camera as strings (MoviePipeline source,
+// GetMetadataFromCameraLocRot and the image passes): unreal/camera/curPos/x, y, z in
+// centimetres, unreal/camera/curRot/pitch, yaw, roll in degrees, and per render pass
+// unreal/camera/<pass>/fov, the full horizontal angle in degrees (overscan included);
+// <pass> is FinalImage for the deferred renderer. Unreal's world is left-handed, X forward,
+// Y right, Z up; a rotator turns by roll about X, then pitch about Y, then yaw about Z
+// (FRotationMatrix), and its view space is Y right, Z up, X forward: the library's camera space
+// with the axes renamed.
+std::optional<Camera> unreal_camera(const OIIO::ImageSpec& spec, const Box2i& display,
+                                    const std::string& file) {
+  std::optional<double> fov = number_attr(spec, "unreal/camera/FinalImage/fov");
+  std::string fov_name = "unreal/camera/FinalImage/fov";
+  if (!fov) {
+    for (const OIIO::ParamValue& p : spec.extra_attribs) {
+      const std::string name = p.name().string();
+      if (name.rfind("unreal/camera/", 0) == 0 && name.size() > 4 &&
+          name.compare(name.size() - 4, 4, "/fov") == 0) {
+        fov = number_attr(spec, name);
+        fov_name = name;
+        if (fov) break;
+      }
+    }
+  }
+  if (!fov) return std::nullopt;
+  const char* kPosition[] = {"unreal/camera/curPos/x", "unreal/camera/curPos/y",
+                             "unreal/camera/curPos/z"};
+  const char* kRotation[] = {"unreal/camera/curRot/pitch", "unreal/camera/curRot/yaw",
+                             "unreal/camera/curRot/roll"};
+  double position[3], rotation[3];
+  bool posed = true;
+  for (int i = 0; i < 3; ++i) {
+    const std::optional<double> p = number_attr(spec, kPosition[i]);
+    const std::optional<double> r = number_attr(spec, kRotation[i]);
+    posed = posed && p && r;
+    position[i] = p.value_or(0);
+    rotation[i] = r.value_or(0);
+  }
+  std::optional<Imath::M44d> world_to_camera;
+  if (posed) {
+    const double d = kPi / 180;
+    const double sp = std::sin(rotation[0] * d), cp = std::cos(rotation[0] * d);
+    const double sy = std::sin(rotation[1] * d), cy = std::cos(rotation[1] * d);
+    const double sr = std::sin(rotation[2] * d), cr = std::cos(rotation[2] * d);
+    // FRotationMatrix's rows: the local X (forward), Y (right) and Z (up) axes in world space.
+    const Imath::V3d forward(cp * cy, cp * sy, sp);
+    const Imath::V3d right(sr * sp * cy - cr * sy, sr * sp * sy + cr * cy, -sr * cp);
+    const Imath::V3d up(-(cr * sp * cy + sr * sy), cy * sr - cr * sp * sy, cr * cp);
+    Imath::M44d camera_to_world;  // rows: our x (right), y (up), z (forward), position
+    for (int j = 0; j < 3; ++j) {
+      camera_to_world[0][j] = right[j];
+      camera_to_world[1][j] = up[j];
+      camera_to_world[2][j] = forward[j];
+      camera_to_world[3][j] = position[j];
+    }
+    world_to_camera = inverse_checked(camera_to_world);
+  }
+  return from_fov(
+      *fov, world_to_camera, Imath::M44d(), spec, display, file,
+      posed ? "Unreal unreal/camera/curPos/curRot/" + fov_name.substr(14) : "Unreal " + fov_name);
+}
+
 using nlohmann::json;
 
 Imath::M44d json_matrix(const json& j, const char* key, const std::string& file, int frame) {
@@ -322,6 +416,8 @@ std::optional<Camera> camera_from_header(const OIIO::ImageSpec& spec, const Box2
   }
   if (std::optional<Camera> c = vray_camera(spec, display_window, file)) return c;
   if (std::optional<Camera> c = arnold_camera(spec, display_window, file)) return c;
+  if (std::optional<Camera> c = redshift_camera(spec, display_window, file)) return c;
+  if (std::optional<Camera> c = unreal_camera(spec, display_window, file)) return c;
   return std::nullopt;
 }
 

@@ -40,6 +40,11 @@ namespace ssgi::detail {
 //                                   pixelAspectRatio mapping screen space to NDC
 //   cameraTransform + cameraFov     V-Ray (OIIO renames cameraTransform to "worldtocamera")
 //   CameraFov or CameraFocalLength + CameraFilmApertureHorizontal (+ worldToCamera)   Arnold
+//   rs/camera/fov (+ rs/camera/transform), or RSCameraFOV (+ RSCameraTransform)     Redshift
+//   unreal/camera/<pass>/fov (+ unreal/camera/curPos/*, curRot/*)       Unreal Movie Render Queue
+// Karma's render delegate hands husk worldToCamera and worldToScreen, and RenderMan's display
+// drivers get Nl and NP, which OpenEXR writers store under the same two names: both are read as
+// the OpenEXR pair (the names are not confirmed on files from either).
 // Throws Error(kInput) naming `file` when the attributes are there but unusable (singular,
 // not a perspective projection).
 std::optional<Camera> camera_from_header(const OIIO::ImageSpec& spec, const Box2i& display_window,
