@@ -257,6 +257,9 @@ int run_sweep(int argc, char** argv) {
 
   // Everything that can be refused is refused before the first frame is traced.
   const ssgi::SequenceInfo sequence = ssgi::open_sequence(o.run.input);
+  // The runs write the frames found now: a gap among them is warned about once, here.
+  ssgi::InputOptions input = o.run.input;
+  if (input.frames.empty()) input.frames = frame_ranges(sequence.frames);
   const std::string first_input = sequence.pattern.path_for(sequence.frames.front());
   const std::string truth =
       o.truth.empty() ? "" : resolve_truth_layer(sequence.channels, o.truth, first_input);
@@ -284,7 +287,7 @@ int run_sweep(int argc, char** argv) {
 
   // The reference keeps the input's channels, so that its depth marks the background.
   ssgi::RunOptions reference = subcommand_defaults(kReferenceCommand);
-  reference.input = o.run.input;
+  reference.input = input;
   reference.gi.rays = o.reference_spp;
   reference.output = scratch.path() + "/reference.####.exr";
   const ssgi::RunReport reference_report = run_checked(reference);
@@ -300,6 +303,7 @@ int run_sweep(int argc, char** argv) {
     for (std::size_t i = 0; i < rows.size(); ++i) {
       SweepRow& row = rows[i];
       ssgi::RunOptions run = o.run;
+      run.input = input;
       run.gi = row.run.gi;
       run.output = scratch.path() + "/run.####.exr";
       run.write.passthrough = false;

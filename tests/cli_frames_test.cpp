@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -58,6 +59,91 @@ TEST_F(Cli, WithoutARangeTheFramesOnDiskAreWritten) {
       {"run", testdata("bad/gap.####.exr"), "-o", path("g.####.exr"), "--rays", "2", "-q"});
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(entries(), (std::set<std::string>{"g.0001.exr", "g.0003.exr"}));
+}
+
+// Whether two EXRs hold the same bits in each of our channels (memcmp: signed zeros too).
+bool same_bits(const std::string& a, const std::string& b) {
+  const ExrImage x = read_exr(a), y = read_exr(b);
+  for (const std::string& c : kOurChannels) {
+    const std::vector<float>& p = x.planes.at(c);
+    const std::vector<float>& q = y.planes.at(c);
+    if (p.size() != q.size() || std::memcmp(p.data(), q.data(), p.size() * sizeof(float)) != 0)
+      return false;
+  }
+  return true;
+}
+
+TEST_F(Cli, AGapInTheFramesOnDiskIsWarnedAboutAndEndsTheShot) {
+  // The sample without frame 3, and each side of the gap as a shot of its own.
+  for (const auto& [dir, frames] : std::vector<std::pair<std::string, std::vector<int>>>{
+           {"in", {1, 2, 4, 5, 6}}, {"before", {1, 2}}, {"after", {4, 5, 6}}}) {
+    fs::create_directory(path(dir));
+    for (int f : frames) {
+      const std::string name = "sample.000" + std::to_string(f) + ".exr";
+      fs::copy_file(testdata("sample/" + name), path(dir + "/" + name));
+    }
+  }
+  const std::string in = path("in/sample.####.exr");
+  const std::string warning = "ssgi: warning: " + in +
+                              ": frame 3 is missing; the temporal stage ends the shot at the gap, "
+                              "as at its first and last frames";
+  const std::vector<int> written = {1, 2, 4, 5, 6};
+  for (const std::string temporal : {"window", "ema"}) {
+    SCOPED_TRACE(temporal);
+    const std::vector<std::string> settings = {"--preset", "draft", "--temporal", temporal};
+    auto run = [&](std::vector<std::string> args) {
+      args.insert(args.end(), settings.begin(), settings.end());
+      return run_ssgi(args);
+    };
+    const CliResult r = run({"run", in, "-o", path(temporal + ".####.exr")});
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    const std::vector<std::string> lines = r.err_lines();
+    ASSERT_EQ(lines.size(), 7u) << r.err;  // the warning, 5 frames, the summary
+    EXPECT_EQ(lines.front(), warning);
+    EXPECT_EQ(lines.back(), "ssgi: 5 of 5 frames written");
+    // Each side as its own shot: frame 2's window and average never see frame 4, nor 4's 2.
+    for (const std::string side : {"before", "after"})
+      ASSERT_EQ(run({"run", path(side + "/sample.####.exr"), "-o", path(temporal + "_own.####.exr"),
+                     "-q"})
+                    .exit_code,
+                0);
+    // Chunks that start right after the gap and end right before it, and one frame alone.
+    ASSERT_EQ(run({"run", in, "--frames", "4-5", "-o", path(temporal + "_chunk.####.exr"), "-q"})
+                  .exit_code,
+              0);
+    ASSERT_EQ(run({"run", in, "--frames", "1-2,6", "-o", path(temporal + "_chunk.####.exr"), "-q"})
+                  .exit_code,
+              0);
+    ASSERT_EQ(
+        run({"run", path("in/sample.0004.exr"), "-o", path(temporal + "_single.0004.exr"), "-q"})
+            .exit_code,
+        0);
+    for (int f : written) {
+      const std::string frame = ".000" + std::to_string(f) + ".exr";
+      const std::string whole = path(temporal + frame);
+      EXPECT_TRUE(same_bits(whole, path(temporal + "_own" + frame))) << "frame " << f;
+      EXPECT_TRUE(same_bits(whole, path(temporal + "_chunk" + frame))) << "frame " << f;
+    }
+    EXPECT_TRUE(same_bits(path(temporal + ".0004.exr"), path(temporal + "_single.0004.exr")));
+  }
+  // info and sweep say it too, once (sweep runs the shot several times).
+  CliResult r = run_ssgi({"info", in});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err, warning + "\n");
+  r = run_ssgi(
+      {"sweep", in, "-o", path("sweep.csv"), "--presets", "draft", "--reference-spp", "4"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  const std::vector<std::string> lines = r.err_lines();
+  EXPECT_EQ(std::count_if(lines.begin(), lines.end(),
+                          [](const std::string& l) { return l.rfind("ssgi: warning: ", 0) == 0; }),
+            1)
+      << r.err;
+  EXPECT_EQ(lines.front(), warning);
+  // Asked for by --frames, the missing frame is an error.
+  r = run_ssgi({"run", in, "--frames", "1-6", "-o", path("listed.####.exr")});
+  EXPECT_EQ(r.exit_code, 4);
+  expect_one_error(r, path("in/sample.0003.exr"), "frame 3 is missing");
+  EXPECT_FALSE(fs::exists(path("listed.0001.exr")));
 }
 
 TEST_F(Cli, PatternMatchingNothingIsAnError) {

@@ -385,6 +385,41 @@ TEST_F(FindFramesOnDiskTest, NothingToFind) {
             Frames{});
 }
 
+TEST(FrameGapsTest, AGapIsARunOfMissingFramesOnTheShotsStep) {
+  FrameGaps g = find_frame_gaps({1, 2, 4, 5, 6, 10, 11});
+  EXPECT_EQ(g.step, 1);
+  EXPECT_EQ(g.gaps, (std::vector<std::pair<int, int>>{{3, 3}, {7, 9}}));
+  EXPECT_EQ(frame_gaps_text(g), "3, 7-9");
+  // Rendered on twos: the odd frames are the shot, and only a missing odd frame is a gap.
+  g = find_frame_gaps({1, 3, 5, 9, 11, 19});
+  EXPECT_EQ(g.step, 2);
+  EXPECT_EQ(g.gaps, (std::vector<std::pair<int, int>>{{7, 7}, {13, 17}}));
+  EXPECT_EQ(frame_gaps_text(g), "7, 13-17x2");
+  g = find_frame_gaps({-3, -1, 1, 3});
+  EXPECT_EQ(g.step, 2);
+  EXPECT_TRUE(g.gaps.empty());
+  g = find_frame_gaps({-5, -4, -1});
+  EXPECT_EQ(g.gaps, (std::vector<std::pair<int, int>>{{-3, -2}}));
+  EXPECT_EQ(frame_gaps_text(g), "-3--2");
+  // No gap without two frames; none either between the ends of int.
+  EXPECT_TRUE(find_frame_gaps({}).gaps.empty());
+  EXPECT_TRUE(find_frame_gaps({7}).gaps.empty());
+  g = find_frame_gaps({INT_MIN, INT_MAX});
+  EXPECT_EQ(g.step, int64_t{INT_MAX} - INT_MIN);
+  EXPECT_TRUE(g.gaps.empty());
+}
+
+TEST(FrameGapsTest, ALongListNamesTheFirstGapsAndCountsTheRest) {
+  Frames frames;
+  for (int f = 1; f <= 40; f += 3) {  // 1, 2, 4, 5, ...: every third frame missing
+    frames.push_back(f);
+    frames.push_back(f + 1);
+  }
+  const FrameGaps g = find_frame_gaps(frames);
+  EXPECT_EQ(g.gaps.size(), 13u);
+  EXPECT_EQ(frame_gaps_text(g), "3, 6, 9, 12, 15, 18, 21, 24 and 5 more gaps");
+}
+
 }  // namespace
 }  // namespace ssgi
 

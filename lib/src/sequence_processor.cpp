@@ -22,6 +22,7 @@
 #include "parallel.h"
 #include "ssgi/error.h"
 #include "ssgi/log.h"
+#include "ssgi/sequence.h"
 
 namespace ssgi::detail {
 namespace {
@@ -49,13 +50,48 @@ struct Step {
   bool again = false;    // `read` (the frame `output`) decoded again to be finished, not lit
 };
 
+// The temporal stage's shot: the frames on disk, cut at their gaps (find_frame_gaps) into parts
+// that it treats as shots of their own. Whatever frames a run writes, the parts are the same.
+class ShotParts {
+ public:
+  explicit ShotParts(const std::vector<int>& frames_on_disk) : disk_(frames_on_disk) {
+    const std::vector<std::pair<int, int>> gaps = find_frame_gaps(disk_).gaps;
+    std::size_t gap = 0;
+    for (int i = 0; i < static_cast<int>(disk_.size()); ++i) {
+      const bool after_gap = gap < gaps.size() && gaps[gap].second < disk_[i];
+      if (after_gap) ++gap;
+      part_begin_.push_back(i == 0 || after_gap ? i : part_begin_.back());
+    }
+  }
+
+  // The index in the frames on disk of `frame`, which is one of them.
+  int index(int frame) const {
+    return static_cast<int>(std::lower_bound(disk_.begin(), disk_.end(), frame) - disk_.begin());
+  }
+  // The index of the first frame of the part that holds the frame at `index`.
+  int part_begin(int index) const { return part_begin_[index]; }
+  // Whether frames `a` and `b` on disk lie in one part: no gap between them.
+  bool together(int a, int b) const { return part_begin(index(a)) == part_begin(index(b)); }
+  // Whether frame `f` on disk is in the window of radius `radius` around frame `n` on disk:
+  // within `radius` frame numbers of it, and no gap between them (a gap ends the shot).
+  bool in_window(int f, int n, int radius) const {
+    return std::abs(f - n) <= radius && together(f, n);
+  }
+
+ private:
+  const std::vector<int>& disk_;
+  std::vector<int> part_begin_;  // per frame on disk
+};
+
 // The steps of a run, mirroring what the temporal stage needs: for each frame written, the
 // frames on disk within its window that the ring does not hold yet (the ring drops the frames
 // outside the window first), then with `read_twice` the frame itself again; or the running
-// average's steps up to it (continued from the last frame written when it came shortly before,
-// else a pre-roll), or the frame alone.
-std::vector<Step> plan_steps(const SequenceInfo& seq, TemporalMode mode, int radius, int preroll,
-                             const std::vector<char>& reuse, bool read_twice) {
+// average's steps up to it (continued from the last frame written when it came shortly before
+// in the same part of the shot, else a pre-roll from no earlier than the part's first frame),
+// or the frame alone.
+std::vector<Step> plan_steps(const SequenceInfo& seq, const ShotParts& parts, TemporalMode mode,
+                             int radius, int preroll, const std::vector<char>& reuse,
+                             bool read_twice) {
   const std::vector<int>& disk = seq.frames_on_disk;
   std::vector<Step> steps;
   std::set<int> ring;
@@ -70,17 +106,18 @@ std::vector<Step> plan_steps(const SequenceInfo& seq, TemporalMode mode, int rad
           break;
         case TemporalMode::kWindow:
           for (auto it = ring.begin(); it != ring.end();)
-            it = std::abs(*it - n) > radius ? ring.erase(it) : std::next(it);
+            it = parts.in_window(*it, n, radius) ? std::next(it) : ring.erase(it);
           for (int f : disk)
-            if (std::abs(f - n) <= radius && ring.insert(f).second) steps.push_back({f, i});
+            if (parts.in_window(f, n, radius) && ring.insert(f).second) steps.push_back({f, i});
           if (read_twice) steps.push_back({n, i, false, false, true});
           break;
         case TemporalMode::kEma: {
-          const int target =
-              static_cast<int>(std::lower_bound(disk.begin(), disk.end(), n) - disk.begin());
+          const int target = parts.index(n);
+          const int part_begin = parts.part_begin(target);
           // Counted in frames on disk (averaging steps), not frame numbers.
-          const bool follows = ema_last >= 0 && ema_last < target && target - ema_last <= preroll;
-          const int start = follows ? ema_last + 1 : std::max(0, target - preroll);
+          const bool follows =
+              ema_last >= part_begin && ema_last < target && target - ema_last <= preroll;
+          const int start = follows ? ema_last + 1 : std::max(part_begin, target - preroll);
           for (int d = start; d <= target; ++d)
             steps.push_back({disk[d], i, !follows && d == start});
           ema_last = target;
@@ -223,13 +260,14 @@ class Processor {
         callbacks_(callbacks),
         mode_(stages_.plan().temporal),
         radius_(stages_.settings().temporal_radius),
-        read_twice_(job.read_twice && mode_ == TemporalMode::kWindow) {
+        read_twice_(job.read_twice && mode_ == TemporalMode::kWindow),
+        parts_(seq_.frames_on_disk) {
     const int preroll =
         mode_ == TemporalMode::kEma
             ? std::min(ema_preroll_frames(stages_.settings().ema_alpha, kEmaPrerollBound),
                        static_cast<int>(seq_.frames_on_disk.size()))
             : 0;
-    steps_ = plan_steps(seq_, mode_, radius_, preroll, job.reuse, read_twice_);
+    steps_ = plan_steps(seq_, parts_, mode_, radius_, preroll, job.reuse, read_twice_);
     for (int i = 0; i < static_cast<int>(seq_.frames.size()); ++i)
       if (!job.reuse[i]) output_index_[seq_.frames[i]] = i;
   }
@@ -308,7 +346,7 @@ class Processor {
     const auto start = Clock::now();
     if (mode_ == TemporalMode::kWindow && made)
       for (auto it = ring_.begin(); it != ring_.end();)
-        it = std::abs(it->first - n) > radius_ ? ring_.erase(it) : std::next(it);
+        it = parts_.in_window(it->first, n, radius_) ? std::next(it) : ring_.erase(it);
     std::optional<InputFrame> own;        // frame n, when it is read at the step that finishes it
     std::optional<FrameError> own_error;  // why frame n could not be read again
     if (s.again) {
@@ -376,9 +414,7 @@ class Processor {
     TracedLight traced = stages_.trace_light(frame.g);
     if (mode_ == TemporalMode::kEma) {
       if (s.restart) ema_valid_ = false;
-      const std::vector<int>& disk = seq_.frames_on_disk;
-      ema_step(static_cast<int>(std::lower_bound(disk.begin(), disk.end(), s.read) - disk.begin()),
-               std::move(traced));
+      ema_step(parts_.index(s.read), std::move(traced));
       if (s.read == n && s.finish) return frame;
       return std::nullopt;
     }
@@ -423,7 +459,7 @@ class Processor {
       std::vector<const TracedLight*> traced;      // those multiframe reads
       int center = -1, traced_center = -1;
       for (int f : seq_.frames_on_disk) {
-        if (std::abs(f - n) > radius_) continue;
+        if (!parts_.in_window(f, n, radius_)) continue;
         if (const auto it = failed_.find(f); it != failed_.end()) {
           if (warned_.insert(f).second)
             log_warning((it->second.file.empty() ? seq_.pattern.path_for(f) : it->second.file) +
@@ -557,6 +593,7 @@ class Processor {
   const TemporalMode mode_;
   const int radius_;
   const bool read_twice_;  // SequenceJob::read_twice, in the window mode
+  const ShotParts parts_;
   std::vector<Step> steps_;
   std::map<int, int> output_index_;  // frames to make -> their index in seq_.frames
 

@@ -1,7 +1,9 @@
 // Image-sequence patterns and frame lists in the manner of oiiotool.
 #pragma once
 
+#include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace ssgi {
@@ -49,5 +51,22 @@ std::vector<int> parse_frame_list(const std::string& spec);
 // a frame field and for a directory that does not exist; throws Error(kIO) when the directory
 // cannot be read.
 std::vector<int> find_frames_on_disk(const SequencePattern& pattern);
+
+// The frames a shot lacks between its first and last frames on disk. The shot's step is the
+// greatest common divisor of the differences between its frames (2 for a shot rendered on twos,
+// 1 when it has fewer than two frames); a gap is a run of frames on that step, between two
+// frames on disk, of which none is there. The temporal stage ends the shot at a gap as at its
+// first and last frames.
+struct FrameGaps {
+  int64_t step = 1;
+  std::vector<std::pair<int, int>> gaps;  // the first and last frame missing in each, ascending
+};
+
+// The gaps of `frames_on_disk` (ascending, without repeats: find_frames_on_disk's result).
+FrameGaps find_frame_gaps(const std::vector<int>& frames_on_disk);
+
+// The missing frames of `gaps` as a frame list: "3, 7-9" (with step 2, "7, 13-17x2"). A long one
+// names the first gaps and counts the others.
+std::string frame_gaps_text(const FrameGaps& gaps);
 
 }  // namespace ssgi

@@ -495,6 +495,19 @@ std::shared_ptr<const SequenceInfo> open_context(const SequenceInfo& seq,
   return context;
 }
 
+// Warns once, naming the frames that `gaps` (of the input's frames on disk) lacks. The
+// temporal stage takes its shot's gaps as ends, unless a context holds the frames.
+void warn_about_gaps(const std::string& pattern, const FrameGaps& gaps, const SequenceInfo& seq) {
+  const bool one_frame = gaps.gaps.size() == 1 && gaps.gaps[0].first == gaps.gaps[0].second;
+  const bool filled = seq.context && find_frame_gaps(seq.frames_on_disk).gaps.empty();
+  log_warning(pattern + ": " + (one_frame ? "frame " : "frames ") + frame_gaps_text(gaps) +
+              (one_frame ? " is" : " are") + " missing; " +
+              (filled ? std::string("the temporal stage reads the context's")
+                      : std::string("the temporal stage ends the shot at ") +
+                            (gaps.gaps.size() == 1 ? "the gap" : "each gap") +
+                            ", as at its first and last frames"));
+}
+
 SequenceInfo open_sequence(const InputOptions& options, bool check_header_camera) {
   SequenceInfo seq;
   std::vector<int> frames_in_name;
@@ -531,6 +544,10 @@ SequenceInfo open_sequence(const InputOptions& options, bool check_header_camera
     wanted = frames_in_name;
   else
     wanted = seq.frames_on_disk;
+  // Frames found on disk rather than asked for: a gap among them is no error, but is said.
+  const FrameGaps gaps = options.frames.empty() && frames_in_name.empty()
+                             ? find_frame_gaps(seq.frames_on_disk)
+                             : FrameGaps();
   if (wanted.empty()) throw_io(options.pattern, "no files match this pattern");
   if (seq.frames_on_disk.empty()) {
     for (int f : wanted)
@@ -609,6 +626,7 @@ SequenceInfo open_sequence(const InputOptions& options, bool check_header_camera
     check_header_camera_against_positions(seq, options, *in, first);
     check_depth_against_positions(seq, options, *in, first);
   }
+  if (!gaps.gaps.empty()) warn_about_gaps(options.pattern, gaps, seq);
   return seq;
 }
 

@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
+#include <numeric>
 #include <optional>
 #include <string_view>
 #include <system_error>
@@ -28,6 +29,9 @@ constexpr int64_t kMaxPadding = 32;
 // Far more than any shot; a typo such as `1-2000000000` fails at once instead of allocating
 // gigabytes.
 constexpr int64_t kMaxFrames = 1'000'000;
+
+// A warning names at most this many gaps: a shot that lacks every other frame still gets a line.
+constexpr std::size_t kGapsNamed = 8;
 
 constexpr int64_t kMinFrame = std::numeric_limits<int>::min();
 constexpr int64_t kMaxFrame = std::numeric_limits<int>::max();
@@ -304,6 +308,37 @@ std::vector<int> find_frames_on_disk(const SequencePattern& pattern) {
   if (error) throw_io(directory, "cannot list the directory: " + error.message());
   std::sort(frames.begin(), frames.end());
   return frames;
+}
+
+FrameGaps find_frame_gaps(const std::vector<int>& frames_on_disk) {
+  FrameGaps result;
+  const std::vector<int>& disk = frames_on_disk;
+  if (disk.size() < 2) return result;
+  int64_t step = 0;
+  for (std::size_t i = 1; i < disk.size(); ++i)
+    step = std::gcd(step, int64_t{disk[i]} - int64_t{disk[i - 1]});
+  result.step = step;
+  for (std::size_t i = 1; i < disk.size(); ++i) {
+    if (int64_t{disk[i]} - int64_t{disk[i - 1]} > step)
+      result.gaps.emplace_back(static_cast<int>(disk[i - 1] + step),
+                               static_cast<int>(disk[i] - step));
+  }
+  return result;
+}
+
+std::string frame_gaps_text(const FrameGaps& gaps) {
+  std::string text;
+  const std::size_t named = std::min(gaps.gaps.size(), kGapsNamed);
+  for (std::size_t i = 0; i < named; ++i) {
+    const auto [first, last] = gaps.gaps[i];
+    if (!text.empty()) text += ", ";
+    text += std::to_string(first);
+    if (last != first) text += "-" + std::to_string(last);
+    if (last != first && gaps.step > 1) text += "x" + std::to_string(gaps.step);
+  }
+  if (named < gaps.gaps.size())
+    text += " and " + std::to_string(gaps.gaps.size() - named) + " more gaps";
+  return text;
 }
 
 }  // namespace ssgi
