@@ -127,11 +127,13 @@ for page in "${pages[@]}"; do
     fail=1
   fi
   if [ "$file" != ssgi.1 ] &&
-    ! printf '%s\n' "$see_also" | grep -qE "^\.BR $name \($section\)"; then
+    ! grep -qE "^\.BR $name \($section\)" <<<"$see_also"; then
     echo "man_page_test: man/$file: not listed in SEE ALSO of man/ssgi.1" >&2
     fail=1
   fi
-  if ! printf '%s\n' "$installs" | grep -F "man/$file" | grep -qF "MANDIR}/man$section"; then
+  # Without -q the last grep reads all its input: under pipefail, a grep -q that stops at its
+  # first match can kill the writer with SIGPIPE and fail the pipeline.
+  if ! grep -F "man/$file" <<<"$installs" | grep -F "MANDIR}/man$section" >/dev/null; then
     echo "man_page_test: man/$file: not installed to \${CMAKE_INSTALL_MANDIR}/man$section" \
       "by CMakeLists.txt" >&2
     fail=1

@@ -58,7 +58,7 @@ for scene in room stage "${training[@]}"; do
     oiiotool --nosoftwareattrib "$f" --eraseattrib worldToCamera --eraseattrib worldToNDC \
       --eraseattrib screenWindowCenter --eraseattrib screenWindowWidth -o "$stripped/$(basename "$f")"
   done
-  if "$ssgi" info "$stripped/$scene.0001.exr" 2>&1 | grep -q 'worldToCamera'; then
+  if "$ssgi" info "$stripped/$scene.0001.exr" 2>&1 | grep 'worldToCamera' > /dev/null; then
     echo "as_rendered.sh: $scene: the camera attributes were not removed" >&2
     exit 1
   fi
