@@ -12,6 +12,7 @@
 #include "ssgi/color.h"
 #include "ssgi/io.h"
 #include "ssgi/layout.h"
+#include "ssgi/log.h"
 #include "ssgi/pipeline.h"
 #include "ssgi/threads.h"
 
@@ -240,6 +241,7 @@ int run_info(int argc, char** argv) {
   r.settings = ssgi::describe_settings(o.run.gi);
   try {
     r.plan = ssgi::make_plan(seq, o.run.gi);
+    for (const std::string& warning : r.plan->warnings) ssgi::log_warning(warning);
     // What the run's colour management would decide (the config is loaded, nothing converted).
     const ssgi::ColorManagement color = ssgi::color_management_for(o.run.gi.color, seq);
     for (const std::string& reason : color.reasons()) r.plan->reasons.push_back(reason);

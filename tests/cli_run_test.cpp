@@ -183,6 +183,70 @@ TEST_F(Cli, ARegionRenderWithItsContextGetsTheWholeFramesLight) {
   }
 }
 
+// A region render run alone is warned about, suggesting --context, and gets no more than the
+// whole frame's light over its pixels. The region is the centre of `moving`, a floor and wall lit
+// by a spot, whose surroundings are dark (as the Cycles stage's): its misses must not bring the
+// lit centre's light in place of the dark border it cannot see (1.30x the whole frame's when they
+// did). One frame, whole and cropped, so that neither has temporal neighbours.
+TEST_F(Cli, ARegionRenderAloneIsWarnedAndGetsNoMoreThanTheWholeFramesLight) {
+  const OIIO::ROI region(16, 48, 8, 40);  // 32x32 at (16, 8) of the 64x48 display window
+  fs::copy_file(testdata("moving/moving.0001.exr"), path("whole.0001.exr"));
+  ASSERT_TRUE(OIIO::ImageBufAlgo::crop(OIIO::ImageBuf(path("whole.0001.exr")), region)
+                  .write(path("crop.0001.exr")));
+  const auto warnings = [](const CliResult& r) {
+    std::vector<std::string> lines;
+    for (const std::string& line : r.err_lines())
+      if (line.rfind("ssgi: warning: ", 0) == 0) lines.push_back(line);
+    return lines;
+  };
+  const CliResult whole = run_ssgi({"run", path("whole.0001.exr"), "-o", path("whole_out.exr")});
+  ASSERT_EQ(whole.exit_code, 0) << whole.err;
+  EXPECT_EQ(warnings(whole).size(), 0u) << whole.err;
+  const CliResult alone = run_ssgi({"run", path("crop.0001.exr"), "-o", path("alone.exr")});
+  ASSERT_EQ(alone.exit_code, 0) << alone.err;
+
+  // Per channel, the mean over the region's surface pixels.
+  const ExrImage input = read_exr(path("crop.0001.exr"));
+  const ExrImage alone_out = read_exr(path("alone.exr"));
+  const ExrImage whole_out = read_exr(path("whole_out.exr"));
+  for (const std::string c : {"R", "G", "B"}) {
+    double alone_sum = 0, whole_sum = 0;
+    int surfaces = 0;
+    for (int y = 0; y < 32; ++y)
+      for (int x = 0; x < 32; ++x) {
+        if (!(input.planes.at("ViewLayer.Depth.Z")[y * 32 + x] < 1e9f)) continue;
+        alone_sum += alone_out.planes.at("indirect." + c)[y * 32 + x];
+        whole_sum += whole_out.planes.at("indirect." + c)[(y + 8) * 64 + x + 16];
+        ++surfaces;
+      }
+    ASSERT_GT(surfaces, 0);
+    const double alone_mean = alone_sum / surfaces, whole_mean = whole_sum / surfaces;
+    // The whole frame's light there is about 0.065.
+    EXPECT_GT(whole_mean, 0.03) << c;
+    // At most 10% more (what a crop's own trace and denoising may add), and a clear fraction:
+    // a crop whose rays bring nothing fails.
+    EXPECT_LE(alone_mean, 1.10 * whole_mean) << c;
+    EXPECT_GT(alone_mean, 0.5 * whole_mean) << c;
+  }
+
+  // One warning line, from run and from info, naming the file and suggesting --context.
+  for (const CliResult& r : {alone, run_ssgi({"info", path("crop.0001.exr")})}) {
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const std::vector<std::string> lines = warnings(r);
+    ASSERT_EQ(lines.size(), 1u) << r.err;
+    const std::string head = "ssgi: warning: " + path("crop.0001.exr") +
+                             ": the data window (16,8)-(47,39) is a region of the display window "
+                             "(0,0)-(63,47): ";
+    EXPECT_EQ(lines[0].rfind(head, 0), 0u) << lines[0];
+    EXPECT_NE(lines[0].find("--context"), std::string::npos) << lines[0];
+  }
+  // With the whole frame as its context there is nothing to warn about.
+  const CliResult with_context = run_ssgi({"run", path("crop.0001.exr"), "--context",
+                                           path("whole.0001.exr"), "-o", path("region.exr")});
+  ASSERT_EQ(with_context.exit_code, 0) << with_context.err;
+  EXPECT_EQ(warnings(with_context).size(), 0u) << with_context.err;
+}
+
 // A context that is not the region's whole picture is refused before anything is written, with
 // the context's file named.
 TEST_F(Cli, AContextThatDoesNotHoldTheRegionIsRefused) {

@@ -17,6 +17,12 @@ std::string color_string(const std::array<float, 3>& c) {
   return s.str();
 }
 
+// A window as OpenEXR states it, inclusive: (x0,y0)-(x1,y1).
+std::string corners(const Box2i& b) {
+  return "(" + std::to_string(b.x0) + "," + std::to_string(b.y0) + ")-(" +
+         std::to_string(b.x1 - 1) + "," + std::to_string(b.y1 - 1) + ")";
+}
+
 void validate(const GiSettings& s) {
   if (s.rays < 1 || s.rays > 4096) throw_usage("--rays must be between 1 and 4096");
   if (s.max_steps < 1 || s.max_steps > 1 << 20)
@@ -112,7 +118,19 @@ Plan make_plan(const SequenceInfo& seq, const GiSettings& s) {
                 "shows surfaces facing that way (-v prints each frame's numbers)";
       break;
   }
+  // A region render: what is lit (the data window, or the context's) lacks part of the picture.
+  const bool cropped = !seq.working_window().contains(seq.display_window);
+  if (cropped && (s.miss == MissMode::kAuto || s.miss == MissMode::kFrame))
+    misses +=
+        "; a region render: the part of the display window's border it lacks brings no light "
+        "(a fraction of the whole frame's light)";
   plan.reasons.push_back(misses);
+  if (cropped && !seq.context)
+    plan.warnings.push_back(
+        seq.pattern.path_for(seq.frames.front()) + ": the data window " + corners(seq.data_window) +
+        " is a region of the display window " + corners(seq.display_window) +
+        ": its rays see only the region, which gets a fraction of the whole frame's light there; "
+        "give the whole frames it was cut from with --context");
   plan.trace_scale = 1;
   if (s.tracer == Tracer::kSlices) {
     plan.trace_scale = s.trace_scale;

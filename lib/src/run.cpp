@@ -146,6 +146,7 @@ RunReport run_sequence(const RunOptions& options, const RunCallbacks& callbacks)
   const detail::FrameStages pipeline(seq, options.gi, memory);
   const Plan& plan = pipeline.plan();
   for (const std::string& reason : plan.reasons) log_info("plan: " + reason);
+  for (const std::string& warning : plan.warnings) log_warning(warning);
 
   // What the output's header records of how it was made; --skip-existing reads it back.
   const std::vector<std::pair<std::string, std::string>> made_by = {

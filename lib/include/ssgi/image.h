@@ -16,6 +16,9 @@ struct Box2i {
   int height() const { return y1 - y0; }
   bool empty() const { return x1 <= x0 || y1 <= y0; }
   bool contains(int x, int y) const { return x >= x0 && x < x1 && y >= y0 && y < y1; }
+  bool contains(const Box2i& o) const {
+    return o.x0 >= x0 && o.y0 >= y0 && o.x1 <= x1 && o.y1 <= y1;
+  }
   bool operator==(const Box2i& o) const {
     return x0 == o.x0 && y0 == o.y0 && x1 == o.x1 && y1 == o.y1;
   }

@@ -22,6 +22,7 @@ struct Plan {
   TemporalMode temporal = TemporalMode::kNone;
   int multiframe = 0;                // frames each side that missed rays are continued in (0: none)
   std::vector<std::string> reasons;  // one line per decision, for `ssgi info` and -v
+  std::vector<std::string> warnings;  // what `ssgi run` and `ssgi info` warn about, one line each
 };
 
 // Decides the plan for `sequence` under `settings`.

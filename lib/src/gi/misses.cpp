@@ -183,6 +183,21 @@ MissModel::MissModel(const GBuffer& g, MissMode mode, const Environment& env)
     }
   }
   if (mode != MissMode::kAuto) sky_behind_ = sky_;
+  if (!g.data_window.contains(g.display_window))
+    border_held_ = static_cast<float>(held_border_share(g));
+}
+
+double MissModel::held_border_share(const GBuffer& g) const {
+  const int w = g.display_window.width(), h = g.display_window.height();
+  const int stride = std::max(1, static_cast<int>(std::sqrt(static_cast<double>(w) * h) / 256));
+  double held = 0, all = 0;
+  for (int y = stride / 2; y < h; y += stride)
+    for (int x = stride / 2; x < w; x += stride) {
+      const double b = border_weight(x + 0.5, y + 0.5);
+      all += b;
+      if (g.data_window.contains(g.display_window.x0 + x, g.display_window.y0 + y)) held += b;
+    }
+  return all > 0 ? held / all : 1.0;
 }
 
 double MissModel::border_weight(double x, double y) const {
@@ -254,6 +269,10 @@ CubeLight MissModel::cube_light(const TraceGrid& grid, const std::array<float, 4
     for (int c = 0; c < 3; ++c)
       out[f][c] =
           static_cast<float>((sum[f][c] + prior * total[c] / weight_all) / (weight[f] + prior));
+  // A region render: the border the data window does not hold brings no light (misses.h).
+  if (border_held_ < 1.0f)
+    for (auto& face : out)
+      for (float& c : face) c *= border_held_;
   return out;
 }
 
@@ -275,6 +294,10 @@ std::string MissModel::describe() const {
   }
   std::snprintf(buf, sizeof buf, "; ground to the horizon %.2f", ground_);
   s += buf;
+  if (border_held_ < 1.0f) {
+    std::snprintf(buf, sizeof buf, "; the data window holds %.3f of the border", border_held_);
+    s += buf;
+  }
   s += "; enclosed right left up down forward back:";
   for (int f = 0; f < kCubeFaces; ++f) {
     std::snprintf(buf, sizeof buf, " %.2f", enclosed_[f]);

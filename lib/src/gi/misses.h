@@ -18,7 +18,13 @@
 //    (border_weight) face that way. Behind the camera, which no visible surface can face, is
 //    enclosed at least as much as the mean of right and left; in a room (a ceiling and a
 //    floor along the border, no sky) right, left and back at least as much as both;
-//  - per bounce, each direction's colour: the light of the border surfaces facing it.
+//  - per bounce, each direction's colour: the light of the border surfaces facing it;
+//  - how much of that evidence it was given: a data window that does not hold the display
+//    window (a region render) holds only part of the border's weight, and what lies in the rest
+//    is unknown. The rest counts as surfaces that bring no light: the colours are scaled by the
+//    share held (1 for a whole frame or overscan), so that the misses of a crop of a lit centre
+//    do not bring that centre's light in place of its darker surroundings'. A crop gets a
+//    fraction of the whole frame's light there; --context gives it the whole frame's.
 // The part of a miss along d that is not sky is split over the cube's directions by d's squared
 // components; each part meets a surface as far as its direction is enclosed, and brings that
 // direction's colour (an ambient cube, Mitchell et al. 2006). Under an open sky (the frame's top
@@ -124,6 +130,9 @@ class MissModel {
   // frame: exp(-d / (kBorder x the display window's smaller side)), d its distance to the
   // nearest edge.
   double border_weight(double x, double y) const;
+  // The border weight of the display window's pixels inside the data window over that of all
+  // its pixels, on a lattice of the display window (every pixel up to 256 x 256 of them).
+  double held_border_share(const GBuffer& g) const;
   static constexpr double kBorder = 0.1;
   // Below the horizon under an open sky, the ground takes all of a miss's part that would
   // meet a wall from sin(depression) 1 / kGroundSteepness (11.5 degrees) down: walls about
@@ -133,6 +142,9 @@ class MissModel {
   const Environment& env_;
   double display_w_, display_h_;  // the display window's size
   double offset_x_, offset_y_;    // the data window's origin in it
+  // The share of the border's weight the data window holds (held_border_share; 1 when it holds
+  // the display window): the cube's colours are scaled by it.
+  float border_held_ = 1.0f;
   // The cube's axes in camera space: the view's horizontal right, the world's up, the view's
   // horizontal forward; face 2 i is +axis i, 2 i + 1 its opposite (so 5 is behind the camera).
   Imath::V3f axis_[3];
