@@ -16,13 +16,7 @@
 set -euo pipefail
 source "$(dirname "$0")/common.sh"
 
-if [ -n "${SSGI_TRAINING_SCENES:-}" ]; then
-  read -r -a training <<< "$SSGI_TRAINING_SCENES"
-else
-  mapfile -t training < <("${BLENDER:-blender}" -b --factory-startup --python-exit-code 1 \
-    -P tests/accuracy/training/scenes.py -- --list 2> /dev/null |
-    awk -F'\t' '$1 == "SCENE" { print $2 }')
-fi
+mapfile -t training < <(training_scenes)
 cache=
 [ ${#training[@]} -eq 0 ] || cache=$(tests/accuracy/training/render.sh "${training[@]}" | tail -n 1)
 

@@ -13,6 +13,18 @@ truth=$build/bin/truth_error
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 
+# training_scenes: the training scenes to measure, one a line: SSGI_TRAINING_SCENES
+# (space-separated), else every scene training/scenes.py lists (BLENDER runs it).
+training_scenes() {
+  if [ -n "${SSGI_TRAINING_SCENES:-}" ]; then
+    printf '%s\n' $SSGI_TRAINING_SCENES
+  else
+    "${BLENDER:-blender}" -b --factory-startup --python-exit-code 1 \
+      -P tests/accuracy/training/scenes.py -- --list 2> /dev/null |
+      awk -F'\t' '$1 == "SCENE" { print $2 }'
+  fi
+}
+
 # truth_means DIR SCENE: truth_error's seven columns, each averaged over the frames
 # DIR/SCENE.*.exr, against ssgi's output $out/o.<frame>.exr.
 truth_means() {

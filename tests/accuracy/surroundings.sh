@@ -23,13 +23,7 @@ source "$(dirname "$0")/common.sh"
 
 frame=${SSGI_SURROUNDINGS_FRAME:-4}
 blender=${BLENDER:-blender}
-if [ -n "${SSGI_TRAINING_SCENES:-}" ]; then
-  read -r -a scenes <<< "$SSGI_TRAINING_SCENES"
-else
-  mapfile -t scenes < <("$blender" -b --factory-startup --python-exit-code 1 \
-    -P tests/accuracy/training/scenes.py -- --list 2> /dev/null |
-    awk -F'\t' '$1 == "SCENE" { print $2 }')
-fi
+mapfile -t scenes < <(training_scenes)
 [ ${#scenes[@]} -gt 0 ] || { echo "surroundings.sh: no scenes" >&2; exit 1; }
 cache=$(tests/accuracy/training/render.sh "${scenes[@]}" | tail -n 1)
 f=$(printf '%04d' "$frame")
