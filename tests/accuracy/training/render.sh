@@ -94,7 +94,8 @@ for name in "${scenes[@]}"; do
   complete "$tmp" "$name" || { echo "render.sh: $name: incomplete output in $tmp" >&2; exit 1; }
   # The samples as rendered (scenes.py raises them for scenes whose truth needs more).
   spp=$(python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["spp"])' "$tmp/camera.json")
-  echo "$spp samples, $resolution, $(( ($(date +%s) - start) / frames )) s/frame" > "$tmp/render.txt"
+  echo "$spp samples, $resolution, $(( ($(date +%s) - start) / frames )) s/frame" \
+    > "$tmp/render.txt"
   echo "$name: $(cat "$tmp/render.txt")" >&2
   rm -f "$tmp/blender.log"
   chmod 755 "$tmp"
