@@ -2,13 +2,14 @@
 
 Usage (Blender 3.4, headless):
   blender -b --factory-startup --python-exit-code 1 -P tests/accuracy/training/scenes.py -- \
-      --scene NAME --out DIR [--samples N] [--frames N] [--list] [--no-render]
+      --scene NAME --out DIR [--samples N] [--frames N] [--resolution WxH] [--list] [--no-render]
       [--panorama FRAME [--panorama-at camera|surfaces]]
 
 Builds scene NAME from primitives only (no assets), renders frames 1..N (default 8) into
 DIR/NAME.####.exr (Cycles CPU, N samples per pixel, default 256, times the scene's
-SAMPLES_FACTOR; no adaptive sampling, no denoising, 320x180, multilayer 32-bit float ZIP EXR,
-view layer "ViewLayer" with the passes of ../shared/data) and writes DIR/camera.json in the
+SAMPLES_FACTOR; no adaptive sampling, no denoising, WxH pixels, default 320x180, multilayer
+32-bit float ZIP EXR, view layer "ViewLayer" with the passes of ../shared/data; the camera moves
+between its first and its last key over frames 1..N) and writes DIR/camera.json in the
 sample's format, including each frame's OpenEXR worldToCamera and worldToNDC
 (camera_matrices.py). Stock Blender does not put those in the headers: render.sh adds them
 afterwards. --list prints the scene names and what each one exercises
@@ -574,7 +575,7 @@ SCENES = {
 SAMPLES_FACTOR = {"lamplit": 4}
 
 
-def render_settings(scene, samples, frames):
+def render_settings(scene, samples, frames, width, height):
     scene.render.engine = "CYCLES"
     scene.cycles.device = "CPU"
     scene.cycles.samples = samples
@@ -587,8 +588,8 @@ def render_settings(scene, samples, frames):
     scene.cycles.max_bounces = 12
     scene.cycles.diffuse_bounces = 4
     scene.render.use_motion_blur = False  # the Vector pass needs it off
-    scene.render.resolution_x = WIDTH
-    scene.render.resolution_y = HEIGHT
+    scene.render.resolution_x = width
+    scene.render.resolution_y = height
     scene.render.resolution_percentage = 100
     scene.frame_start = 1
     scene.frame_end = frames
@@ -605,7 +606,8 @@ def render_settings(scene, samples, frames):
 
 def camera_json(scene, name, samples, frames, world):
     cam = scene.camera
-    out = {"scene": name, "width": WIDTH, "height": HEIGHT, "spp": samples}
+    width, height = scene.render.resolution_x, scene.render.resolution_y
+    out = {"scene": name, "width": width, "height": height, "spp": samples}
     out.update(world)
     out["frames"] = []
     for f in range(1, frames + 1):
@@ -613,7 +615,7 @@ def camera_json(scene, name, samples, frames, world):
         depsgraph = bpy.context.evaluated_depsgraph_get()
         c2w = [list(row) for row in cam.matrix_world]
         proj = [list(row) for row in
-                cam.calc_matrix_camera(depsgraph, x=WIDTH, y=HEIGHT, scale_x=1.0, scale_y=1.0)]
+                cam.calc_matrix_camera(depsgraph, x=width, y=height, scale_x=1.0, scale_y=1.0)]
         out["frames"].append({
             "frame": f,
             "camera_to_world_gl": c2w,
@@ -638,7 +640,7 @@ def visible_centroid(scene, across=32):
     depsgraph = bpy.context.evaluated_depsgraph_get()
     origin = cam.matrix_world.translation
     corners = [cam.matrix_world @ v for v in cam.data.view_frame(scene=scene)]
-    down = across * HEIGHT // WIDTH
+    down = across * scene.render.resolution_y // scene.render.resolution_x
     total, hits = Vector((0.0, 0.0, 0.0)), 0
     for j in range(down):
         for i in range(across):
@@ -685,15 +687,15 @@ def render_panorama(scene, name, frame, out_dir, at):
 
 def main():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-    opts = {"--samples": "256", "--frames": "8"}
+    opts = {"--samples": "256", "--frames": "8", "--resolution": f"{WIDTH}x{HEIGHT}"}
     flags = set()
     i = 0
     while i < len(argv):
         if argv[i] in ("--list", "--no-render"):
             flags.add(argv[i])
             i += 1
-        elif (argv[i] in ("--scene", "--out", "--samples", "--frames", "--panorama",
-                          "--panorama-at") and i + 1 < len(argv)):
+        elif (argv[i] in ("--scene", "--out", "--samples", "--frames", "--resolution",
+                          "--panorama", "--panorama-at") and i + 1 < len(argv)):
             opts[argv[i]] = argv[i + 1]
             i += 2
         else:
@@ -707,9 +709,14 @@ def main():
         raise SystemExit(f"scenes.py: need --scene ({', '.join(SCENES)}) and --out DIR")
     samples, frames, out_dir = int(opts["--samples"]), int(opts["--frames"]), opts["--out"]
     samples *= SAMPLES_FACTOR.get(name, 1)
+    try:
+        width, height = (int(v) for v in opts["--resolution"].split("x"))
+    except ValueError:
+        raise SystemExit(f"scenes.py: --resolution takes WxH, e.g. 1920x1080, not "
+                         f"{opts['--resolution']!r}")
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
-    render_settings(scene, samples, frames)
+    render_settings(scene, samples, frames, width, height)
     world = SCENES[name][0](frames)
     os.makedirs(out_dir, exist_ok=True)
     if opts.get("--panorama-at", "camera") not in ("camera", "surfaces"):
