@@ -211,7 +211,6 @@ RunReport run_sequence(const RunOptions& options, const RunCallbacks& callbacks)
   job.sequence = &seq;
   job.input = &options.input;
   job.pipeline = &pipeline;
-  job.keep_input_pixels = write_exr && options.write.passthrough;
   job.reuse = reuse;
   job.output_path = [&](int frame) { return write_exr ? out.path_for(frame) : std::string(); };
   job.fail_fast = options.fail_fast;

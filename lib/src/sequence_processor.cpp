@@ -313,8 +313,6 @@ class Processor {
     const auto start = Clock::now();
     const Plan& plan = stages_.plan();
     RoleMask roles = plan.roles;
-    // An input's pixels are kept for the frame's output only.
-    bool keep_pixels = job_.keep_input_pixels && still_to_write(step.read, step.output);
     bool report = true;
     if (step.again) {
       // Motion only served the trace grid.
@@ -324,11 +322,10 @@ class Processor {
       // (the second reading gives it).
       roles &= ~role_bit(Role::kBeauty);
       if (!plan.gather_emission) roles &= ~role_bit(Role::kEmission);
-      keep_pixels = report = false;
+      report = false;
     }
     try {
-      d.frame = read_input_frame(seq_, step.read, roles, *job_.input, &stages_.color(), keep_pixels,
-                                 report);
+      d.frame = read_input_frame(seq_, step.read, roles, *job_.input, &stages_.color(), report);
     } catch (const Error& e) {
       d.error = error_of(e);
     } catch (const std::bad_alloc&) {
@@ -375,19 +372,17 @@ class Processor {
       return m;
     }
     const auto finish_start = Clock::now();
-    double convert_ms = 0;
     try {
       // A frame that could not be lit fails for that reason first.
       if (own_error && !failed_.count(n)) rethrow(*own_error);
-      finish(n, std::move(own), &m, &convert_ms);
+      finish(n, std::move(own), &m);
     } catch (const Error& e) {
       m.error = error_of(e);
     } catch (const std::bad_alloc&) {
       m.error = FrameError{ErrorKind::kIO, seq_.pattern.path_for(n), "out of memory"};
     }
     std::pair<double, double>& times = times_[n];
-    times.first += convert_ms;
-    times.second += ms_since(finish_start) - convert_ms;
+    times.second += ms_since(finish_start);
     m.read_ms = times.first;
     m.gi_ms = times.second;
     times_.erase(n);
@@ -420,17 +415,12 @@ class Processor {
     }
     Lit lit{std::move(traced), nullptr, nullptr};
     if (still_to_write(s.read, s.output) && !read_twice_) {
-      // Kept until the frame is written: its input (headers, and with passthrough its pixels),
-      // and its passes unless they can be converted again from those pixels. Motion only
-      // served the trace grid, which the ring holds.
+      // Kept until the frame is written: its passes and its input's headers. Motion only served
+      // the trace grid, which the ring holds.
       lit.input = frame.input;
-      // With a context the passes are kept too: converting them again would decode the
-      // context's file again.
-      if (!job_.keep_input_pixels || s.read == n || seq_.context) {
-        frame.g.motion_prev = Image();
-        frame.g.motion_next = Image();
-        lit.g = std::make_shared<const GBuffer>(std::move(frame.g));
-      }
+      frame.g.motion_prev = Image();
+      frame.g.motion_next = Image();
+      lit.g = std::make_shared<const GBuffer>(std::move(frame.g));
     }
     ring_[s.read] = std::move(lit);
     return std::nullopt;
@@ -450,7 +440,7 @@ class Processor {
 
   // Frame n's light filtered, finished and composited into *m. `own` is frame n as read at this
   // step, if it was.
-  void finish(int n, std::optional<InputFrame> own, Made* m, double* convert_ms) {
+  void finish(int n, std::optional<InputFrame> own, Made* m) {
     if (const auto it = failed_.find(n); it != failed_.end()) rethrow(it->second);
     Image indirect, coverage;
     if (mode_ == TemporalMode::kWindow) {
@@ -485,12 +475,6 @@ class Processor {
                       "frame " + std::to_string(n) + " was not read again");
         lit.g = std::make_shared<const GBuffer>(std::move(own->g));
         lit.input = std::move(own->input);
-      } else if (!lit.g) {
-        const auto start = Clock::now();
-        RoleMask roles = stages_.plan().roles & ~role_bit(Role::kMotion);
-        lit.g = std::make_shared<const GBuffer>(
-            gbuffer_from_input(seq_, n, roles, *job_.input, &stages_.color(), *lit.input));
-        *convert_ms += ms_since(start);
       }
       // Each frame's light with the misses' colours the window's mean, then filtered.
       std::vector<MissColours> changes;

@@ -15,17 +15,13 @@
 namespace ssgi::detail {
 
 // Writes a frame the run made (the EXR, the preview): its G-buffer, its results (which it may
-// convert in place) and its input as read. Throws ssgi::Error.
+// convert in place) and its input's headers. Throws ssgi::Error.
 using WriteMadeFrame = std::function<void(const GBuffer&, FrameResult&, const DecodedInput&)>;
 
 struct SequenceJob {
   const SequenceInfo* sequence = nullptr;
   const InputOptions* input = nullptr;
   const FrameStages* pipeline = nullptr;
-  // Passthrough: each input's pixels are kept, in their own formats, until its frame is
-  // written; the G-buffer of a frame that waits for its window's later frames is converted from
-  // them again rather than kept beside them.
-  bool keep_input_pixels = false;
   std::vector<char> reuse;  // per frame of sequence->frames: already there, not made again
   std::function<std::string(int frame)> output_path;  // for the reports; "" when none
   WriteMadeFrame write;
@@ -45,9 +41,9 @@ struct SequenceJob {
 // kept only until it is written.
 RunReport process_sequence(const SequenceJob& job, const RunCallbacks& callbacks);
 
-// The ring the temporal stage keeps is bounded by its window: how many frames' G-buffers (or,
-// with keep_input_pixels, inputs) wait at most for their window's later frames, besides the
-// frame being lit and those in flight (none when they are read twice).
+// The ring the temporal stage keeps is bounded by its window: how many frames' G-buffers wait at
+// most for their window's later frames, besides the frame being lit and those in flight (none
+// when they are read twice).
 int frames_waiting(TemporalMode mode, int temporal_radius, bool read_twice);
 
 }  // namespace ssgi::detail

@@ -843,8 +843,7 @@ GBuffer with_context(const SequenceInfo& seq, int frame, RoleMask roles,
                      const InputOptions& options, const ColorManagement* color, GBuffer g,
                      bool report) {
   if (!seq.context) return g;
-  GBuffer context =
-      detail::read_input_frame(*seq.context, frame, roles, options, color, false, report).g;
+  GBuffer context = detail::read_input_frame(*seq.context, frame, roles, options, color, report).g;
   return embed_in_context(seq, std::move(g), std::move(context));
 }
 
@@ -854,20 +853,17 @@ namespace detail {
 
 InputFrame read_input_frame(const SequenceInfo& seq, int frame, RoleMask roles,
                             const InputOptions& options, const ColorManagement* color,
-                            bool keep_pixels, bool report) {
+                            bool report) {
   const std::string path = seq.pattern.path_for(frame);
   // A neighbour of the temporal stage that only the context has: its whole picture. (A frame
   // to write is the region's: its file missing now is an error below.)
   if (seq.context && std::find(seq.frames.begin(), seq.frames.end(), frame) == seq.frames.end() &&
       !fs::exists(path))
-    return read_input_frame(*seq.context, frame, roles, options, color, false, report);
+    return read_input_frame(*seq.context, frame, roles, options, color, report);
   auto in = open_exr(path);
-  auto input = std::make_shared<DecodedInput>(decode_input(*in, path, keep_pixels));
+  auto input = std::make_shared<DecodedInput>(decode_input(*in, path));
   const FillChannels fill = [&](int subimage, const std::vector<PlaneTarget>& targets) {
-    if (keep_pixels)
-      float_channels_from(*input, subimage, targets, seq.data_window);
-    else
-      read_float_channels(*in, subimage, targets, seq.data_window, path);
+    read_float_channels(*in, subimage, targets, seq.data_window, path);
   };
   GBuffer g = convert_gbuffer(seq, frame, roles, options, color, *input, fill, report);
   in.reset();
@@ -875,21 +871,11 @@ InputFrame read_input_frame(const SequenceInfo& seq, int frame, RoleMask roles,
   return {std::move(g), std::move(input)};
 }
 
-GBuffer gbuffer_from_input(const SequenceInfo& seq, int frame, RoleMask roles,
-                           const InputOptions& options, const ColorManagement* color,
-                           const DecodedInput& input) {
-  const FillChannels fill = [&](int subimage, const std::vector<PlaneTarget>& targets) {
-    float_channels_from(input, subimage, targets, seq.data_window);
-  };
-  return with_context(seq, frame, roles, options, color,
-                      convert_gbuffer(seq, frame, roles, options, color, input, fill, true), true);
-}
-
 }  // namespace detail
 
 GBuffer read_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
                      const InputOptions& options, const ColorManagement* color) {
-  return detail::read_input_frame(seq, frame, roles, options, color, false, true).g;
+  return detail::read_input_frame(seq, frame, roles, options, color, true).g;
 }
 
 }  // namespace ssgi

@@ -58,11 +58,11 @@ std::string part_label(const detail::DecodedInput& input, int subimage) {
   return "part " + std::to_string(subimage) + (name.empty() ? "" : " (" + name + ")");
 }
 
-// Rows [y, y + rows) of our channels, interleaved in front of the host part's kept pixels (if
-// any), in the output's per-channel formats. Counts the values clamped to the half range in
-// *clamped.
+// Rows [y, y + rows) of our channels, interleaved in front of those rows of the host part's
+// own pixels (`host_rows`, if any), in the output's per-channel formats. Counts the values
+// clamped to the half range in *clamped.
 void interleave_host_rows(const std::vector<const float*>& ours, bool half,
-                          const std::byte* host_pixels, std::size_t host_pixel_bytes, int width,
+                          const std::byte* host_rows, std::size_t host_pixel_bytes, int width,
                           int y, int rows, std::byte* out, std::size_t* clamped) {
   const std::size_t our_bytes = ours.size() * (half ? sizeof(Imath::half) : sizeof(float));
   const std::size_t stride = our_bytes + host_pixel_bytes;
@@ -86,7 +86,7 @@ void interleave_host_rows(const std::vector<const float*>& ours, bool half,
       }
     }
     if (host_pixel_bytes)
-      std::memcpy(px + our_bytes, host_pixels + p * host_pixel_bytes, host_pixel_bytes);
+      std::memcpy(px + our_bytes, host_rows + i * host_pixel_bytes, host_pixel_bytes);
   }
 }
 
@@ -151,9 +151,8 @@ void make_output_directory(const std::string& path) {
 void write_frame(const std::string& path, const GBuffer& frame,
                  const std::vector<OutputLayer>& layers, const WriteOptions& options) {
   check_output_directory(path);
-  auto in = detail::open_image(frame.path);
-  const detail::DecodedInput input = detail::decode_input(*in, frame.path, options.passthrough);
-  in.reset();
+  const detail::DecodedInput input =
+      detail::decode_input(*detail::open_image(frame.path), frame.path);
   detail::write_frame(path, frame, layers, options, input);
 }
 
@@ -196,7 +195,6 @@ void detail::write_frame(const std::string& path, const GBuffer& frame,
   for (const auto& [name, value] : options.provenance) host_spec.attribute(name, value);
   host_spec.attribute("compression", options.compression);
 
-  const std::byte* host_pixels = nullptr;
   std::size_t host_pixel_bytes = 0;
   const bool passthrough = options.passthrough;
   if (passthrough && host >= 0) {
@@ -224,8 +222,6 @@ void detail::write_frame(const std::string& path, const GBuffer& frame,
     host_spec.tile_height = hs.tile_height;
     host_spec.tile_depth = hs.tile_depth;
     host_pixel_bytes = hs.pixel_bytes(/*native=*/true);
-    assert(parts[host].pixels.size() == hs.image_bytes(/*native=*/true));
-    host_pixels = parts[host].pixels.data();
   }
   host_spec.nchannels = static_cast<int>(names.size());
   host_spec.channelnames = names;
@@ -279,17 +275,35 @@ void detail::write_frame(const std::string& path, const GBuffer& frame,
     }
   }
 
+  // The input's pixels come from its file, read again strip by strip as they are written.
+  std::unique_ptr<OIIO::ImageInput> in;
+  if (passthrough) {
+    in = detail::open_image(input.path);
+    detail::check_unchanged(*in, input);
+  }
   std::size_t clamped = 0;
+  std::vector<std::byte> host_rows;
   detail::AtomicImageWriter writer(path, specs, "frame");
   for (std::size_t k = 0; k < specs.size(); ++k) {
     if (source[k] < 0) {
-      writer.write_part_in_strips([&](int y, int rows, std::byte* strip) {
-        interleave_host_rows(ours, options.half, host_pixels, host_pixel_bytes, data.width(), y,
-                             rows, strip, &clamped);
-      });
+      const bool with_input = passthrough && host >= 0;
+      writer.write_part_in_strips(
+          [&](int y, int rows, std::byte* strip) {
+            if (with_input) {
+              host_rows.resize(host_pixel_bytes * data.width() * rows);
+              detail::read_native_rows(*in, host, y, y + rows, host_rows.data(), input.path);
+            }
+            interleave_host_rows(ours, options.half, host_rows.data(), host_pixel_bytes,
+                                 data.width(), y, rows, strip, &clamped);
+          },
+          with_input ? detail::rows_per_chunk(parts[host].spec) : 1);
     } else {
-      assert(!parts[source[k]].pixels.empty());
-      writer.write_part(OIIO::TypeUnknown, parts[source[k]].pixels.data());
+      const int part = source[k];
+      writer.write_part_in_strips(
+          [&](int y, int rows, std::byte* strip) {
+            detail::read_native_rows(*in, part, y, y + rows, strip, input.path);
+          },
+          detail::rows_per_chunk(parts[part].spec));
     }
   }
   if (clamped > 0)

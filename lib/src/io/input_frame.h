@@ -1,5 +1,6 @@
-// A frame's input read once for a whole run (internal): the G-buffer the pipeline works on, and
-// the input as decoded, from which the writer copies the header and the passed-through channels.
+// A frame's input read for a run (internal): the G-buffer the pipeline works on, and the input's
+// headers, from which the writer copies the output's header (the passed-through channels it
+// reads from the file again).
 #pragma once
 
 #include <algorithm>
@@ -20,19 +21,13 @@ struct InputFrame {
   std::shared_ptr<const DecodedInput> input;
 };
 
-// read_gbuffer, keeping the parts' headers and, with `keep_pixels` (passthrough), every part's
-// pixels in their own formats; the G-buffer is then converted from those, the file being
-// decoded once. Without `report`, what is wrong with the frame (non-finite values, no
-// surfaces) is not warned about: a frame read again later is warned about then.
+// read_gbuffer, keeping the parts' headers (which the writer copies, and checks the file
+// against when it passes the input's channels through). Without `report`, what is wrong with the
+// frame (non-finite values, no surfaces) is not warned about: a frame read again later is warned
+// about then.
 InputFrame read_input_frame(const SequenceInfo& sequence, int frame, RoleMask roles,
                             const InputOptions& options, const ColorManagement* color,
-                            bool keep_pixels, bool report = true);
-
-// The G-buffer of `roles` again from an input whose pixels were kept, without the file: the
-// same planes read_input_frame gave.
-GBuffer gbuffer_from_input(const SequenceInfo& sequence, int frame, RoleMask roles,
-                           const InputOptions& options, const ColorManagement* color,
-                           const DecodedInput& input);
+                            bool report = true);
 
 // Copies every plane of `src`, whose pixels cover `src_window`, into `dst`, covering
 // `dst_window`, where the two windows overlap; the rest of `dst` is left as it is. Both have the
@@ -54,7 +49,8 @@ inline void copy_window(const Image& src, const Box2i& src_window, Image* dst,
                       (x0 - dst_window.x0));
 }
 
-// write_frame from the input as read: its header, and with passthrough its kept pixels.
+// write_frame from the input as read: its header, and with passthrough its channels, read again
+// from its file strip by strip.
 void write_frame(const std::string& path, const GBuffer& frame,
                  const std::vector<OutputLayer>& layers, const WriteOptions& options,
                  const DecodedInput& input);

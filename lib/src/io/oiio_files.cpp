@@ -6,6 +6,7 @@
 #include <cassert>
 #include <filesystem>
 #include <limits>
+#include <numeric>
 
 #include "ssgi/error.h"
 
@@ -125,24 +126,26 @@ std::vector<std::vector<float>> read_float_planes(OIIO::ImageInput& in, int subi
   return planes;
 }
 
-std::vector<std::byte> read_native_pixels(OIIO::ImageInput& in, int subimage,
-                                          const std::string& path) {
+void read_native_rows(OIIO::ImageInput& in, int subimage, int top, int bottom, std::byte* pixels,
+                      const std::string& path) {
   if (!in.seek_subimage(subimage, 0))
     throw_io(path, "cannot read part " + std::to_string(subimage));
   const OIIO::ImageSpec& spec = in.spec();
-  std::vector<std::byte> pixels(spec.image_bytes(/*native=*/true));
-  if (!in.read_image(subimage, 0, 0, spec.nchannels, OIIO::TypeUnknown, pixels.data()))
-    throw_io(path, "cannot read pixels: " + one_line(in.geterror()));
-  return pixels;
+  assert(top >= 0 && top < bottom && bottom <= spec.height);
+  const bool ok =
+      spec.tile_width > 0
+          ? in.read_tiles(subimage, 0, spec.x, spec.x + spec.width, spec.y + top, spec.y + bottom,
+                          spec.z, spec.z + 1, 0, spec.nchannels, OIIO::TypeUnknown, pixels)
+          : in.read_scanlines(subimage, 0, spec.y + top, spec.y + bottom, spec.z, 0, spec.nchannels,
+                              OIIO::TypeUnknown, pixels);
+  if (!ok) throw_io(path, "cannot read pixels: " + one_line(in.geterror()));
 }
 
-std::size_t DecodedInput::pixel_bytes() const {
-  std::size_t bytes = 0;
-  for (const Part& part : parts) bytes += part.pixels.size();
-  return bytes;
+int rows_per_chunk(const OIIO::ImageSpec& spec) {
+  return spec.tile_width > 0 ? spec.tile_height : lines_per_chunk(spec);
 }
 
-DecodedInput decode_input(OIIO::ImageInput& in, const std::string& path, bool keep_pixels) {
+DecodedInput decode_input(OIIO::ImageInput& in, const std::string& path) {
   DecodedInput input;
   input.path = path;
   for (int s = 0; in.seek_subimage(s, 0); ++s) {
@@ -152,38 +155,32 @@ DecodedInput decode_input(OIIO::ImageInput& in, const std::string& path, bool ke
     input.parts.push_back(std::move(part));
   }
   in.geterror();  // seek_subimage past the last part leaves a message
-  if (keep_pixels)
-    for (std::size_t s = 0; s < input.parts.size(); ++s)
-      if (!input.parts[s].spec.deep)
-        input.parts[s].pixels = read_native_pixels(in, static_cast<int>(s), path);
   return input;
 }
 
-void float_channels_from(const DecodedInput& input, int subimage,
-                         const std::vector<PlaneTarget>& targets, const Box2i& window) {
-  if (targets.empty()) return;
-  assert(subimage >= 0 && subimage < static_cast<int>(input.parts.size()));
-  const DecodedInput::Part& part = input.parts[subimage];
-  const OIIO::ImageSpec& spec = part.spec;
-  if (spec.deep) throw_deep(input.path, subimage);
-  assert(part.pixels.size() == spec.image_bytes(/*native=*/true));
-  const int x0 = std::max(spec.x, window.x0), x1 = std::min(spec.x + spec.width, window.x1);
-  const int y0 = std::max(spec.y, window.y0), y1 = std::min(spec.y + spec.height, window.y1);
-  if (x1 <= x0 || y1 <= y0) return;
-  const std::size_t pixel_bytes = spec.pixel_bytes(/*native=*/true);
-  const std::size_t row_bytes = pixel_bytes * spec.width;
-  for (const PlaneTarget& t : targets) {
-    const std::size_t offset = spec.pixel_bytes(0, t.channel, /*native=*/true);
-    const std::byte* src = part.pixels.data() + static_cast<std::size_t>(y0 - spec.y) * row_bytes +
-                           static_cast<std::size_t>(x0 - spec.x) * pixel_bytes + offset;
-    float* dst =
-        t.plane + static_cast<std::size_t>(y0 - window.y0) * window.width() + (x0 - window.x0);
-    OIIO::convert_image(
-        1, x1 - x0, y1 - y0, 1, src, spec.channelformat(t.channel),
-        static_cast<OIIO::stride_t>(pixel_bytes), static_cast<OIIO::stride_t>(row_bytes),
-        OIIO::AutoStride, dst, OIIO::TypeDesc::FLOAT, sizeof(float),
-        static_cast<OIIO::stride_t>(window.width() * sizeof(float)), OIIO::AutoStride);
+void check_unchanged(OIIO::ImageInput& in, const DecodedInput& input) {
+  const auto changed = [&](const std::string& what) {
+    throw_io(input.path, "changed since it was read (" + what +
+                             "): its channels cannot be passed through as they were");
+  };
+  int count = 0;
+  for (; in.seek_subimage(count, 0); ++count) {
+    if (count >= static_cast<int>(input.parts.size())) break;
+    const OIIO::ImageSpec& now = in.spec();
+    const OIIO::ImageSpec& then = input.parts[count].spec;
+    const std::string part = "part " + std::to_string(count);
+    if (now.x != then.x || now.y != then.y || now.width != then.width ||
+        now.height != then.height || now.deep != then.deep)
+      changed(part + "'s data window");
+    if (now.tile_width != then.tile_width || now.tile_height != then.tile_height)
+      changed(part + "'s tiles");
+    if (now.channelnames != then.channelnames) changed(part + "'s channels");
+    for (int c = 0; c < now.nchannels; ++c)
+      if (now.channelformat(c) != then.channelformat(c)) changed(part + "'s channel formats");
   }
+  in.geterror();
+  if (count != static_cast<int>(input.parts.size()))
+    changed(std::to_string(count) + " parts, not " + std::to_string(input.parts.size()));
 }
 
 AtomicImageWriter::AtomicImageWriter(const std::string& path, std::vector<OIIO::ImageSpec> parts,
@@ -224,12 +221,12 @@ void AtomicImageWriter::write_part(OIIO::TypeDesc format, const void* pixels) {
 }
 
 void AtomicImageWriter::write_part_in_strips(
-    const std::function<void(int y, int rows, std::byte* pixels)>& fill) {
-  assert(out_ && written_ < parts_.size());
+    const std::function<void(int y, int rows, std::byte* pixels)>& fill, int row_multiple) {
+  assert(out_ && written_ < parts_.size() && row_multiple >= 1);
   const OIIO::ImageSpec& spec = parts_[written_];
   if (written_ > 0 && !out_->open(tmp_, spec, OIIO::ImageOutput::AppendSubimage))
     fail(one_line(out_->geterror()));
-  const int chunk = spec.tile_width > 0 ? spec.tile_height : lines_per_chunk(spec);
+  const int chunk = std::lcm(rows_per_chunk(spec), row_multiple);
   const std::size_t row_bytes = spec.scanline_bytes(/*native=*/true);
   const int rows = chunk * std::max<int>(1, static_cast<int>(kStripBytes / (row_bytes * chunk)));
   std::vector<std::byte> strip(row_bytes * std::min(rows, spec.height));

@@ -55,37 +55,37 @@ std::vector<std::vector<float>> read_float_planes(OIIO::ImageInput& in, int subi
 // Error(kInput) naming `path`: part `subimage` holds deep data, which ssgi does not read.
 [[noreturn]] void throw_deep(const std::string& path, int subimage);
 
-// Reads every channel of subimage `subimage` (top mip level) in the file's own per-channel
-// formats, interleaved (spec.pixel_bytes(true) bytes per pixel): uint32 IDs and half passes
-// come back bit for bit. Throws Error(kIO) naming `path`.
-std::vector<std::byte> read_native_pixels(OIIO::ImageInput& in, int subimage,
-                                          const std::string& path);
-
-// A frame's input file as read once: its parts' headers and, when the output passes the input
-// through, every part's pixels in the file's own per-channel formats (uint32 IDs and half passes
-// bit for bit). The writer copies the output's header and passed-through channels from it, so
-// that no input is opened or decoded a second time.
+// A frame's input file as opened when it was read: its parts' headers. The writer copies the
+// output's header from them and passes the input's channels through from the file itself, strip
+// by strip (read_native_rows), so that no frame's input pixels are held while it waits to be
+// written.
 struct DecodedInput {
   struct Part {
-    OIIO::ImageSpec spec;           // its subimage's index is its index in `parts`
-    bool has_mip_levels = false;    // only the full-resolution level is kept
-    std::vector<std::byte> pixels;  // interleaved, spec.pixel_bytes(true) a pixel; empty when
-                                    // not kept (pixels not asked for, or deep data)
+    OIIO::ImageSpec spec;         // its subimage's index is its index in `parts`
+    bool has_mip_levels = false;  // only the full-resolution level is passed through
   };
   std::string path;
   std::vector<Part> parts;
-  std::size_t pixel_bytes() const;  // the kept pixels' size
 };
 
-// The headers of every part of the open file `in` (at `path`) and, with `keep_pixels`, the
-// pixels of every part that is not deep (read_native_pixels). Throws Error(kIO) naming `path`.
-DecodedInput decode_input(OIIO::ImageInput& in, const std::string& path, bool keep_pixels);
+// The headers of every part of the open file `in` (at `path`). Throws Error(kIO) naming `path`.
+DecodedInput decode_input(OIIO::ImageInput& in, const std::string& path);
 
-// read_float_channels from a decoded part's kept pixels instead of the file: the same floats
-// (OIIO's conversion from each channel's own format). Throws Error(kInput) naming `path` for a
-// deep part; `part` must have kept its pixels otherwise.
-void float_channels_from(const DecodedInput& input, int subimage,
-                         const std::vector<PlaneTarget>& targets, const Box2i& window);
+// Throws Error(kIO) naming input.path when the open file `in` (that file, opened again) no longer
+// has the parts `input` was read with: their number, windows, tiling, channels or formats. Its
+// pixels could then not be passed through as they were.
+void check_unchanged(OIIO::ImageInput& in, const DecodedInput& input);
+
+// Reads rows [top, bottom) of subimage `subimage`'s data window (counted from its first row,
+// top mip level) in the file's own per-channel formats, interleaved (spec.pixel_bytes(true) bytes
+// per pixel): uint32 IDs and half passes come back bit for bit. For a tiled part both ends lie on
+// rows of tiles (or the part's end). Throws Error(kIO) naming `path`.
+void read_native_rows(OIIO::ImageInput& in, int subimage, int top, int bottom, std::byte* pixels,
+                      const std::string& path);
+
+// The rows a strip of a part is made of, so that it starts and ends on the part's chunks: a
+// tile's height, or the scanlines its compression packs into one block.
+int rows_per_chunk(const OIIO::ImageSpec& spec);
 
 // A file written through a hidden temporary file in the same directory (keeping the extension,
 // which tells OIIO the format) and renamed into place by commit(). Destroyed before commit(), it
@@ -105,8 +105,11 @@ class AtomicImageWriter {
   // Writes the next part in strips of whole chunks (rows of tiles for a tiled part) of a few
   // megabytes: fill(y, rows, pixels) puts rows [y, y + rows) of the part's data window (y
   // counted from its top) into `pixels`, interleaved in the part's own per-channel formats.
-  // The bytes written are those of write_part; no whole-part buffer is held.
-  void write_part_in_strips(const std::function<void(int y, int rows, std::byte* pixels)>& fill);
+  // With `row_multiple`, every strip but the last is also a whole number of those rows (the
+  // chunks of the file the strips are read from). The bytes written are those of write_part; no
+  // whole-part buffer is held.
+  void write_part_in_strips(const std::function<void(int y, int rows, std::byte* pixels)>& fill,
+                            int row_multiple = 1);
   // Closes the file and renames it into place; every part must have been written.
   void commit();
 
