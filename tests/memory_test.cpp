@@ -293,6 +293,7 @@ TEST(Memory, ReadingTwiceFitsLessAndGivesTheSameBits) {
                                std::to_string(threads) + " threads";
       RunOptions unlimited = o;
       unlimited.memory_limit = {};
+      unlimited.frames_in_flight = 2;  // asked for: the waiting frames kept
       unlimited.output = out + "/kept.####.exr";
       ASSERT_EQ(run_sequence(unlimited).failed(), 0) << what;
       o.output = out + "/twice.####.exr";
@@ -305,6 +306,52 @@ TEST(Memory, ReadingTwiceFitsLessAndGivesTheSameBits) {
       ASSERT_EQ(run_sequence(o).failed(), 0) << what;
       expect_same_frames(unlimited.output, o.output, {4, 5, 6}, what + ", chunk 4-6");
     }
+  }
+}
+
+// Passthrough reads each input's channels from its file again when its frame is written, so an
+// input replaced in between by a file of other channels fails that frame alone, with one line
+// naming the file, and leaves neither its output nor a temporary file; the other frames are
+// written. With the window's frames kept and read twice alike.
+TEST(Memory, AnInputChangedBeforeItsFrameIsWrittenFailsThatFrameAlone) {
+  for (const int in_flight : {2, 0}) {
+    const std::string dir = fresh_dir("ssgi_memory_changed");
+    fs::create_directories(dir + "/out");
+    const auto input = [&](int f) { return dir + "/in.000" + std::to_string(f) + ".exr"; };
+    for (int f = 1; f <= 4; ++f)
+      fs::copy_file(testdata("static/static.000" + std::to_string(f) + ".exr"), input(f));
+    RunOptions o;
+    o.input.pattern = dir + "/in.####.exr";
+    o.output = dir + "/out/o.####.exr";
+    o.frames_in_flight = in_flight;
+    RunCallbacks callbacks;
+    callbacks.on_result = [&](const GBuffer& g, const FrameResult&) {
+      if (g.frame != 2) return;
+      // Frame 2, lit and finished, is rewritten without its last channel before it is written.
+      OIIO::ImageBuf whole(input(2));
+      const int keep = whole.spec().nchannels - 1;
+      OIIO::ImageBuf fewer = OIIO::ImageBufAlgo::channels(whole, keep, {});
+      ASSERT_TRUE(fewer.write(dir + "/replacement.exr")) << fewer.geterror();
+      fs::rename(dir + "/replacement.exr", input(2));
+    };
+    const RunReport report = run_sequence(o, callbacks);
+    const std::string what = in_flight ? "kept" : "read twice";
+    ASSERT_EQ(report.frames.size(), 4u) << what;
+    for (const FrameReport& f : report.frames) {
+      if (f.frame != 2) {
+        EXPECT_TRUE(f.ok) << what << " frame " << f.frame << ": " << f.error;
+        EXPECT_TRUE(fs::exists(f.output)) << what << " " << f.output;
+        continue;
+      }
+      EXPECT_FALSE(f.ok) << what;
+      EXPECT_EQ(f.error_kind, ErrorKind::kIO) << what;
+      EXPECT_EQ(f.error_file, input(2)) << what;
+      EXPECT_NE(f.error.find("changed since it was read"), std::string::npos) << f.error;
+      EXPECT_EQ(f.error.find('\n'), std::string::npos) << f.error;
+      EXPECT_FALSE(fs::exists(f.output)) << what;
+    }
+    for (const auto& entry : fs::directory_iterator(dir + "/out"))
+      EXPECT_NE(entry.path().filename().string().front(), '.') << what << ": " << entry.path();
   }
 }
 

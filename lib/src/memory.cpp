@@ -163,10 +163,9 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
   threads = std::max(1, threads);
 
   // A frame as read: the planes of the roles the plan reads (motion both ways) and the strip
-  // of rows the reader decodes at a time (16 MB); with passthrough, the input's pixels too (4
-  // bytes a channel at most), which stay until the frame is written. Read twice, the first
-  // reading has what tracing needs (no beauty, emission only when gathered, no pixels), the
-  // second what finishing needs (no motion); a frame is the larger.
+  // of rows the reader decodes at a time (16 MB). Read twice, the first reading has what
+  // tracing needs (no beauty, emission only when gathered), the second what finishing needs (no
+  // motion); a frame is the larger.
   const auto role_planes = [&](RoleMask roles) {
     double n = 0;
     for (int r = 0; r < kRoleCount; ++r) {
@@ -179,25 +178,18 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
   const bool read_twice = memory.read_twice && plan.temporal == TemporalMode::kWindow;
   const double read = role_planes(plan.roles);
   const double motion = (plan.roles & role_bit(Role::kMotion)) ? 4 : 0;
-  std::uint64_t input_channels = 0;
-  for (const auto& c : seq.channels.channels) input_channels += c.size();
-  // The input's own pixels cover its data window (with --context, smaller than the passes').
-  const std::uint64_t own_pixels =
-      static_cast<std::uint64_t>(seq.data_window.width()) * seq.data_window.height();
-  const std::uint64_t native = write.passthrough ? planes(input_channels, own_pixels) : 0;
   const std::uint64_t strip = 16 * kMiB;
-  std::uint64_t frame = planes(read, pixels) + native + strip;
+  std::uint64_t frame = planes(read, pixels) + strip;
   if (read_twice) {
     RoleMask traced = plan.roles & ~role_bit(Role::kBeauty);
     if (!plan.gather_emission) traced &= ~role_bit(Role::kEmission);
-    frame = std::max(planes(role_planes(traced), pixels), planes(read - motion, pixels) + native) +
-            strip;
+    frame = std::max(planes(role_planes(traced), pixels), planes(read - motion, pixels)) + strip;
   }
   // The temporal ring: every frame of the window on the trace grid (its light, coverage, depth,
   // normal and motion: 12 planes; in the window its misses' shares and reflected light, 6
   // more, and the levelled light of each while the centre is filtered, 3), and the frames
-  // waiting for their window's later frames: their passes without motion, or with passthrough
-  // their input's pixels alone (the passes are converted from them again).
+  // waiting for their window's later frames with their passes (without motion), unless they are
+  // read twice.
   const std::uint64_t frame_grid = planes(plan.temporal == TemporalMode::kWindow ? 21 : 12, grid);
   std::uint64_t ring_frames = 1, waiting = 0;
   if (plan.temporal == TemporalMode::kWindow) {
@@ -205,12 +197,7 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
     waiting = read_twice ? 0 : s.temporal_radius;
   }
   if (plan.temporal == TemporalMode::kEma) ring_frames = 2;
-  // With --context a waiting frame keeps its passes beside its pixels (converting them again
-  // would decode the context again).
-  const std::uint64_t passes = planes(read - motion, pixels);
-  const std::uint64_t ring = ring_frames * frame_grid + waiting * (!write.passthrough ? passes
-                                                                   : seq.context ? native + passes
-                                                                                 : native);
+  const std::uint64_t ring = ring_frames * frame_grid + waiting * planes(read - motion, pixels);
 
   // Tracing: the reflected light and the trace grid (10 planes and origins), the tracer's
   // hits, then the bounces' light (4 + 3 + 3 planes).
@@ -253,13 +240,13 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
   const std::uint64_t denoise =
       scale > 1 ? planes(9, pixels) : (plan.denoise ? planes(24, pixels) : 0);
   const std::uint64_t composite = planes(14, pixels);
-  // The writer encodes strips of rows: ours and the passed-through channels (16 MB).
-  const std::uint64_t writer = strip;
-  // Overlapping, the next frame is read while one is lit and the last written (its layers and,
-  // with passthrough, its input's pixels).
+  // The writer encodes strips of rows: ours and the passed-through channels (16 MB), which it
+  // reads from the input's file a strip at a time (as much again).
+  const std::uint64_t writer = strip + (write.passthrough ? strip : 0);
+  // Overlapping, the next frame is read while one is lit and the last written (its layers).
   const int in_flight = std::clamp(memory.frames_in_flight, 1, 3);
   const std::uint64_t overlap =
-      (in_flight >= 2 ? frame : 0) + (in_flight >= 3 ? planes(11, pixels) + native + writer : 0);
+      (in_flight >= 2 ? frame : 0) + (in_flight >= 3 ? planes(11, pixels) + writer : 0);
   // The program, its libraries and the allocator's pools; per worker its stack and buffers.
   const std::uint64_t program = 120 * kMiB + static_cast<std::uint64_t>(threads) * 16 * kMiB;
 
@@ -283,18 +270,27 @@ PipelineMemory pipeline_memory_within(const MemoryLimit& limit, const SequenceIn
                                       const WriteOptions& write, int threads,
                                       int frames_in_flight) {
   PipelineMemory memory;
-  memory.frames_in_flight = std::clamp(frames_in_flight, 1, 3);
-  if (limit.bytes == 0) return memory;
+  const bool asked = frames_in_flight > 0;
+  memory.frames_in_flight = asked ? std::clamp(frames_in_flight, 1, 3) : 2;
+  const bool window = plan.temporal == TemporalMode::kWindow;
+  if (limit.bytes == 0) {
+    if (!asked) {
+      memory.frames_in_flight = 1;
+      memory.read_twice = window;
+    }
+    return memory;
+  }
+  const int most = memory.frames_in_flight;
   const auto fits = [&] {
     return estimate_run_memory(seq, plan, s, write, threads, memory).bytes <= limit.bytes;
   };
-  // Less overlap before fewer kept hits: as many frames in flight as fit. The window's frames
+  // Less overlap before fewer kept passes: as many frames in flight as fit. The window's frames
   // are read twice only when one frame in flight does not fit, and then with as many in flight
   // as fit: decoding every frame again costs more time than overlapping less.
   while (memory.frames_in_flight > 1 && !fits()) --memory.frames_in_flight;
-  if (!fits() && plan.temporal == TemporalMode::kWindow) {
+  if (!fits() && window) {
     memory.read_twice = true;
-    memory.frames_in_flight = std::clamp(frames_in_flight, 1, 3);
+    memory.frames_in_flight = most;
     while (memory.frames_in_flight > 1 && !fits()) --memory.frames_in_flight;
   }
   if (s.tracer != Tracer::kReference) return memory;

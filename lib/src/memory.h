@@ -52,14 +52,17 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& sequence, const Plan& pla
                                    const GiSettings& settings, const WriteOptions& write,
                                    int threads, const PipelineMemory& memory);
 
-// The pipeline's memory for a run under `limit`: as many frames in flight (up to
-// `frames_in_flight`, 1 to 3) as the estimate fits, and when one does not, the window's frames
-// read twice (PipelineMemory::read_twice) with as many; the reference keeps at most 1 GiB of hits,
-// and no more than what the limit leaves beside the rest of the run (as little as none: then
-// each bounce traces again).
+// The pipeline's memory for a run under `limit`. Without a limit: `frames_in_flight` when it is
+// asked for (1 to 3) with the window's waiting frames kept, else the least the run can take: one
+// frame in flight and, in the window mode, each frame decoded again to be finished
+// (PipelineMemory::read_twice). Under a limit, the fastest that fits: as many frames in flight
+// (up to `frames_in_flight`, else 2) as the estimate fits, and when one does not, the window's
+// frames read twice with as many. The reference keeps at most 1 GiB of hits, and no more than
+// what the limit leaves beside the rest of the run (as little as none: then each bounce traces
+// again).
 PipelineMemory pipeline_memory_within(const MemoryLimit& limit, const SequenceInfo& sequence,
                                       const Plan& plan, const GiSettings& settings,
                                       const WriteOptions& write, int threads,
-                                      int frames_in_flight = PipelineMemory().frames_in_flight);
+                                      int frames_in_flight = 0);
 
 }  // namespace ssgi

@@ -95,10 +95,8 @@ PipelineMemory check_memory(const RunOptions& o, const SequenceInfo& seq) {
   const Plan plan = make_plan(seq, o.gi);
   const int threads = detail::worker_threads();
   const MemoryLimit& limit = o.memory_limit;
-  const int in_flight =
-      o.frames_in_flight > 0 ? o.frames_in_flight : PipelineMemory().frames_in_flight;
   const PipelineMemory memory =
-      pipeline_memory_within(limit, seq, plan, o.gi, o.write, threads, in_flight);
+      pipeline_memory_within(limit, seq, plan, o.gi, o.write, threads, o.frames_in_flight);
   const MemoryEstimate need = estimate_run_memory(seq, plan, o.gi, o.write, threads, memory);
   log_info("memory: estimated peak " + memory_size_text(need.bytes) + " (" + need.parts +
            "); limit " +
@@ -109,13 +107,18 @@ PipelineMemory check_memory(const RunOptions& o, const SequenceInfo& seq) {
                 "the run needs an estimated " + memory_size_text(need.bytes) + " (" + need.parts +
                     "), over the limit of " + memory_size_text(limit.bytes) + " from " +
                     limit.source);
-  if (memory.frames_in_flight < in_flight)
-    log_info("memory: " + std::to_string(memory.frames_in_flight) +
-             " frames in flight (reading, lighting and writing overlap less) to fit the limit");
-  if (memory.read_twice)
-    log_info(
-        "memory: each frame written is decoded twice (lit, then finished and written) so that "
-        "the frames waiting for their window's later frames hold no passes, to fit the limit");
+  const std::string why = limit.bytes ? "to fit the limit"
+                          : o.frames_in_flight > 0
+                              ? "as asked"
+                              : "the least memory; a --max-memory above it lets the "
+                                "run overlap frames and keep them, to go faster";
+  log_info("memory: " + std::to_string(memory.frames_in_flight) + " frame" +
+           (memory.frames_in_flight > 1 ? "s" : "") + " in flight" +
+           (memory.read_twice ? ", each frame written decoded twice (lit, then finished and "
+                                "written) so that the frames waiting for their window's later "
+                                "frames hold no passes"
+                              : "") +
+           " (" + why + ")");
   if (o.gi.tracer == Tracer::kReference && o.gi.bounces > 1)
     log_info("memory: the reference keeps up to " + memory_size_text(memory.reference_hits_bytes) +
              " of hits for bounces after the first; rows beyond that are traced again");
