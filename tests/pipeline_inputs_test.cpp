@@ -1,12 +1,15 @@
 // What the reader gives the pipeline: colour transforms on the light and albedo passes only, and
-// normals derived from depth.
+// normals derived from depth; and the composite of those passes, written beside them or over
+// them.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <string>
 #include <tuple>
 
+#include "gi/composite.h"
 #include "gtest/gtest.h"
 #include "io/input_frame.h"
 #include "io/pass_agreement.h"
@@ -107,6 +110,59 @@ TEST(Pipeline, NormalsFromDepthTurnFeaturesOnePixelAcrossToTheCamera) {
     EXPECT_NEAR(n.at(1, x, y), 0.0f, 1e-4f);
     EXPECT_NEAR(n.at(2, x, y), -1.0f, 1e-6f);
   }
+}
+
+bool same_bits(const Image& a, const Image& b) {
+  return a.channels() == b.channels() && a.width() == b.width() && a.height() == b.height() &&
+         std::memcmp(a.data().data(), b.data().data(), a.bytes()) == 0;
+}
+
+// The composite written over the frame's albedo and beauty has the bits of the one written beside
+// them, on a frame with background, surfaces without albedo and non-finite light; with a beauty
+// with alpha (written over), without alpha, without a beauty, and without emission.
+TEST(Pipeline, CompositeInPlaceGivesTheBitsOfTheCompositeBeside) {
+  GiSettings s;
+  const Frame f = load("sample/sample.0001.exr", s);
+  const Pipeline pipeline(f.seq, s);
+  Image coverage;
+  const Image indirect = pipeline.indirect_light(f.g, &coverage);
+  GBuffer base = f.g;
+  ASSERT_EQ(base.beauty.channels(), 4);
+  ASSERT_FALSE(base.emission.empty());
+  const int w = base.width();
+  for (int x = 0; x < w; ++x) {
+    for (int c = 0; c < 3; ++c) base.albedo.at(c, x, 1) = 0.0f;       // row 1: no albedo
+    base.depth.at(0, x, 2) = std::numeric_limits<float>::infinity();  // row 2: background
+  }
+  base.direct.at(0, 3, 3) = std::numeric_limits<float>::quiet_NaN();
+  base.direct.at(1, 4, 3) = 3e38f;
+  base.emission.at(2, 4, 3) = 3e38f;
+  int cases = 0;
+  for (const int variant : {0, 1, 2, 3}) {
+    GBuffer g = base;
+    if (variant == 1) {
+      Image rgb(w, g.height(), 3);
+      for (int c = 0; c < 3; ++c)
+        std::copy_n(g.beauty.plane(c), g.beauty.plane_size(), rgb.plane(c));
+      g.beauty = rgb;
+    }
+    if (variant == 2) g.beauty = Image();
+    if (variant == 3) g.emission = Image();
+    const FrameResult beside = detail::composite_frame(g, indirect, coverage);
+    const FrameResult over = detail::composite_frame_in_place(&g, indirect, coverage);
+    EXPECT_TRUE(same_bits(beside.indirect, over.indirect)) << variant;
+    EXPECT_TRUE(same_bits(beside.gi, over.gi)) << variant;
+    EXPECT_TRUE(same_bits(beside.composite, over.composite)) << variant;
+    EXPECT_TRUE(same_bits(beside.coverage, over.coverage)) << variant;
+    EXPECT_TRUE(g.albedo.empty() && g.beauty.empty()) << variant;
+    // Not a composite of nothing: surfaces got light, the background the beauty.
+    double gi = 0;
+    for (float v : over.gi.data()) gi += v;
+    EXPECT_GT(gi, 0) << variant;
+    if (variant != 2) EXPECT_EQ(over.composite.at(0, 5, 2), base.beauty.at(0, 5, 2)) << variant;
+    ++cases;
+  }
+  EXPECT_EQ(cases, 4);
 }
 
 }  // namespace

@@ -224,4 +224,8 @@ FrameResult FrameStages::composite(const GBuffer& g, Image indirect, Image cover
   return composite_frame(g, std::move(indirect), std::move(coverage));
 }
 
+FrameResult FrameStages::composite_in_place(GBuffer* g, Image indirect, Image coverage) const {
+  return composite_frame_in_place(g, std::move(indirect), std::move(coverage));
+}
+
 }  // namespace ssgi::detail

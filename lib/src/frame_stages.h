@@ -57,6 +57,9 @@ class FrameStages {
   Image indirect_light(const GBuffer& frame, Image* coverage = nullptr) const;
   std::string describe_misses(const GBuffer& frame) const;
   FrameResult composite(const GBuffer& frame, Image indirect, Image coverage = {}) const;
+  // composite() written over the frame's albedo and beauty (composite_frame_in_place), for a
+  // frame whose passes are not read after it.
+  FrameResult composite_in_place(GBuffer* frame, Image indirect, Image coverage = {}) const;
 
  private:
   // Tracing, misses and bounces on the trace grid: the light before the denoiser, and, when

@@ -420,7 +420,7 @@ class Processor {
       lit.input = frame.input;
       frame.g.motion_prev = Image();
       frame.g.motion_next = Image();
-      lit.g = std::make_shared<const GBuffer>(std::move(frame.g));
+      lit.g = std::make_shared<GBuffer>(std::move(frame.g));
     }
     ring_[s.read] = std::move(lit);
     return std::nullopt;
@@ -443,6 +443,7 @@ class Processor {
   void finish(int n, std::optional<InputFrame> own, Made* m) {
     if (const auto it = failed_.find(n); it != failed_.end()) rethrow(it->second);
     Image indirect, coverage;
+    std::shared_ptr<GBuffer> g;
     if (mode_ == TemporalMode::kWindow) {
       std::vector<const GBuffer*> frames;
       std::vector<const TracedLight*> lit_frames;  // the window's, as lit
@@ -473,7 +474,7 @@ class Processor {
         if (!own)
           throw Error(ErrorKind::kInternal, seq_.pattern.path_for(n),
                       "frame " + std::to_string(n) + " was not read again");
-        lit.g = std::make_shared<const GBuffer>(std::move(own->g));
+        lit.g = std::make_shared<GBuffer>(std::move(own->g));
         lit.input = std::move(own->input);
       }
       // Each frame's light with the misses' colours the window's mean, then filtered.
@@ -494,24 +495,29 @@ class Processor {
       // The frame's own hits and missed rays served its continuation alone.
       if (lit.traced.trace) lit.traced.trace->release_own();
       // From now on the frame is only a neighbour: reprojection reads its trace grid.
-      m->g = std::move(lit.g);
+      g = std::move(lit.g);
       m->input = std::move(lit.input);
     } else {
       if (!own)
         throw Error(ErrorKind::kInternal, seq_.pattern.path_for(n),
                     "frame " + std::to_string(n) + " was not read");
       m->input = std::move(own->input);
-      auto g = std::make_shared<const GBuffer>(std::move(own->g));
+      g = std::make_shared<GBuffer>(std::move(own->g));
       if (mode_ == TemporalMode::kEma) {
         indirect = stages_.finish_light(*g, ema_out_);
         coverage = stages_.finish_coverage(*g, ema_grid_, ema_coverage_);
       } else {
         indirect = stages_.indirect_light(*g, &coverage);
       }
-      m->g = std::move(g);
     }
+    // Unless a callback or the preview reads the passes after it, the composite is written over
+    // the frame's albedo and beauty: it then takes no plane besides the frame's own.
+    const bool passes_read_after = callbacks_.on_result || job_.write_needs_passes;
     m->result = std::make_shared<FrameResult>(
-        stages_.composite(*m->g, std::move(indirect), std::move(coverage)));
+        passes_read_after
+            ? stages_.composite(*g, std::move(indirect), std::move(coverage))
+            : stages_.composite_in_place(g.get(), std::move(indirect), std::move(coverage)));
+    m->g = std::move(g);
     if (seq_.context) cut_to(seq_.data_window, &m->g, m->result.get());
   }
 
@@ -566,7 +572,7 @@ class Processor {
     // Its trace grid (what reprojection reads), its own light and coverage there before
     // temporal filtering, and with multiframe what continuing rays reads.
     TracedLight traced;
-    std::shared_ptr<const GBuffer> g;  // while it is still to be written (or converted again)
+    std::shared_ptr<GBuffer> g;                 // while it is still to be written
     std::shared_ptr<const DecodedInput> input;  // while it is still to be written
   };
 

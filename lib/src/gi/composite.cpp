@@ -38,52 +38,85 @@ Image reflected_radiance(const GBuffer& g, bool with_emission) {
   return out;
 }
 
-FrameResult composite_frame(const GBuffer& g, Image indirect, Image coverage) {
+namespace {
+
+// The composite of `g` with its albedo and beauty `albedo` and `beauty` (g's own, or r->gi and
+// r->composite holding them: each pixel's passes are read before its results are written over
+// them) into r->gi and r->composite.
+void composite_into(const GBuffer& g, const Image& albedo, const Image& beauty, FrameResult* r) {
   const int w = g.width(), h = g.height();
-  FrameResult r;
-  r.indirect = std::move(indirect);
-  r.coverage = std::move(coverage);
-  const bool with_coverage = !r.coverage.empty();
-  r.gi = Image(w, h, 3);
-  r.composite = Image(w, h, 4);
-  const bool emission = !g.emission.empty(), beauty = !g.beauty.empty();
+  const bool with_coverage = !r->coverage.empty();
+  const bool emission = !g.emission.empty(), with_beauty = !beauty.empty();
   parallel_for_rows(h, [&](int y) {
     const std::size_t row = static_cast<std::size_t>(y) * w;
     const float* depth = g.depth.plane(0) + row;
-    // A surface without diffuse albedo (an emitter, a mirror) reflects no diffuse light: its
-    // indirect is 0, as in the renderers' own diffuse passes.
-    const float *red = g.albedo.plane(0) + row, *green = g.albedo.plane(1) + row,
-                *blue = g.albedo.plane(2) + row;
+    const float *reflectance[3], *direct[3], *emitted[3] = {}, *background[3] = {};
+    float *ind[3], *gi[3], *out[3];
     for (int c = 0; c < 3; ++c) {
-      float* ind = r.indirect.plane(c) + row;
-      float* gi = r.gi.plane(c) + row;
-      float* out = r.composite.plane(c) + row;
-      const float* albedo = g.albedo.plane(c) + row;
-      const float* direct = g.direct.plane(c) + row;
-      const float* emitted = emission ? g.emission.plane(c) + row : nullptr;
-      const float* background = beauty ? g.beauty.plane(c) + row : nullptr;
-      for (int x = 0; x < w; ++x) {
-        if (!std::isfinite(depth[x])) {
-          ind[x] = gi[x] = 0.0f;
-          out[x] = background ? finite(background[x]) : 0.0f;
-          continue;
+      reflectance[c] = albedo.plane(c) + row;
+      direct[c] = g.direct.plane(c) + row;
+      if (emission) emitted[c] = g.emission.plane(c) + row;
+      if (with_beauty) background[c] = beauty.plane(c) + row;
+      ind[c] = r->indirect.plane(c) + row;
+      gi[c] = r->gi.plane(c) + row;
+      out[c] = r->composite.plane(c) + row;
+    }
+    for (int x = 0; x < w; ++x) {
+      if (!std::isfinite(depth[x])) {
+        for (int c = 0; c < 3; ++c) {
+          const float behind = with_beauty ? finite(background[c][x]) : 0.0f;
+          ind[c][x] = gi[c][x] = 0.0f;
+          out[c][x] = behind;
         }
-        if (red[x] == 0 && green[x] == 0 && blue[x] == 0) ind[x] = 0.0f;
-        gi[x] = finite(albedo[x] * ind[x]);
-        float rgb = direct[x] + gi[x];
-        if (emitted) rgb += emitted[x];
-        out[x] = finite(rgb);
+        continue;
+      }
+      // A surface without diffuse albedo (an emitter, a mirror) reflects no diffuse light: its
+      // indirect is 0, as in the renderers' own diffuse passes.
+      const bool no_albedo =
+          reflectance[0][x] == 0 && reflectance[1][x] == 0 && reflectance[2][x] == 0;
+      for (int c = 0; c < 3; ++c) {
+        if (no_albedo) ind[c][x] = 0.0f;
+        const float reflected = finite(reflectance[c][x] * ind[c][x]);
+        float rgb = direct[c][x] + reflected;
+        if (emission) rgb += emitted[c][x];
+        gi[c][x] = reflected;
+        out[c][x] = finite(rgb);
       }
     }
     if (with_coverage) {
-      float* cov = r.coverage.plane(0) + row;
+      float* cov = r->coverage.plane(0) + row;
       for (int x = 0; x < w; ++x)
         cov[x] = std::isfinite(depth[x]) ? std::clamp(finite(cov[x]), 0.0f, 1.0f) : 0.0f;
     }
-    float* alpha = r.composite.plane(3) + row;
-    const float* beauty_alpha = beauty ? g.beauty.plane(3) + row : nullptr;
+    float* alpha = r->composite.plane(3) + row;
+    const float* beauty_alpha = with_beauty ? beauty.plane(3) + row : nullptr;
     for (int x = 0; x < w; ++x) alpha[x] = beauty_alpha ? finite(beauty_alpha[x]) : 1.0f;
   });
+}
+
+}  // namespace
+
+FrameResult composite_frame(const GBuffer& g, Image indirect, Image coverage) {
+  FrameResult r;
+  r.indirect = std::move(indirect);
+  r.coverage = std::move(coverage);
+  r.gi = Image(g.width(), g.height(), 3);
+  r.composite = Image(g.width(), g.height(), 4);
+  composite_into(g, g.albedo, g.beauty, &r);
+  return r;
+}
+
+FrameResult composite_frame_in_place(GBuffer* g, Image indirect, Image coverage) {
+  FrameResult r;
+  r.indirect = std::move(indirect);
+  r.coverage = std::move(coverage);
+  r.gi = std::move(g->albedo);
+  const bool over_beauty = g->beauty.channels() == 4;
+  r.composite = over_beauty ? std::move(g->beauty) : Image(g->width(), g->height(), 4);
+  composite_into(*g, r.gi, over_beauty ? r.composite : g->beauty, &r);
+  // A moved-from Image keeps its size: these are made absent.
+  g->albedo = Image();
+  g->beauty = Image();
   return r;
 }
 

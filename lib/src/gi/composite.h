@@ -11,6 +11,11 @@ namespace ssgi::detail {
 // within [0, 1] and 0 on background.
 FrameResult composite_frame(const GBuffer& g, Image indirect, Image coverage = {});
 
+// composite_frame for a G-buffer not needed after it: gi is written over its albedo and the
+// composite over its beauty (when that has an alpha), so that compositing takes no plane
+// besides the frame's own. Leaves *g without albedo and beauty.
+FrameResult composite_frame_in_place(GBuffer* g, Image indirect, Image coverage = {});
+
 // The light a surface reflects towards others: direct (albedo included), plus emission when
 // `with_emission`; 0 on background.
 Image reflected_radiance(const GBuffer& g, bool with_emission);
