@@ -12,7 +12,7 @@
 #include "frame_stages.h"
 #include "io/preview.h"
 #include "memory.h"
-#include "parallel.h"
+#include "memory_plan.h"
 #include "sequence_processor.h"
 #include "ssgi/log.h"
 #include "ssgi/settings.h"
@@ -92,24 +92,15 @@ std::string settings_text(const RunOptions& o, const SequenceInfo& seq) {
 // The pipeline's memory under the run's limit; throws Error(kInput) when the estimated peak is
 // over the limit.
 PipelineMemory check_memory(const RunOptions& o, const SequenceInfo& seq) {
-  const Plan plan = make_plan(seq, o.gi);
-  const int threads = detail::worker_threads();
-  const MemoryLimit& limit = o.memory_limit;
-  const int in_flight =
-      o.frames_in_flight > 0 ? o.frames_in_flight : PipelineMemory().frames_in_flight;
-  const PipelineMemory memory =
-      pipeline_memory_within(limit, seq, plan, o.gi, o.write, threads, in_flight);
-  const MemoryEstimate need = estimate_run_memory(seq, plan, o.gi, o.write, threads, memory);
-  log_info("memory: estimated peak " + memory_size_text(need.bytes) + " (" + need.parts +
-           "); limit " +
-           (limit.bytes ? memory_size_text(limit.bytes) + " from " + limit.source
-                        : std::string("none (no --max-memory, no scheduler limit)")));
-  if (limit.bytes && need.bytes > limit.bytes)
+  const MemoryPlan m = plan_run_memory(seq, o.gi, o.write, o.memory_limit, o.frames_in_flight);
+  const PipelineMemory& memory = m.memory;
+  log_info("memory: estimated peak " + memory_size_text(m.estimate.bytes) + " (" +
+           m.estimate.parts + "); limit " + memory_limit_text(m.limit));
+  if (m.over_limit())
     throw Error(ErrorKind::kInput, seq.pattern.path_for(seq.frames.front()),
-                "the run needs an estimated " + memory_size_text(need.bytes) + " (" + need.parts +
-                    "), over the limit of " + memory_size_text(limit.bytes) + " from " +
-                    limit.source);
-  if (memory.frames_in_flight < in_flight)
+                "the run needs an estimated " + memory_size_text(m.estimate.bytes) + " (" +
+                    m.estimate.parts + "), over the limit of " + memory_limit_text(m.limit));
+  if (memory.frames_in_flight < m.frames_in_flight_asked)
     log_info("memory: " + std::to_string(memory.frames_in_flight) +
              " frames in flight (reading, lighting and writing overlap less) to fit the limit");
   if (memory.read_twice)

@@ -1,0 +1,25 @@
+// A run's memory plan, worked out once for `ssgi run` and `ssgi info`.
+#include "memory_plan.h"
+
+#include "parallel.h"
+
+namespace ssgi {
+
+MemoryPlan plan_run_memory(const SequenceInfo& seq, const GiSettings& gi, const WriteOptions& write,
+                           const MemoryLimit& limit, int frames_in_flight) {
+  const Plan plan = make_plan(seq, gi);
+  const int threads = detail::worker_threads();
+  MemoryPlan m;
+  m.limit = limit;
+  if (frames_in_flight > 0) m.frames_in_flight_asked = frames_in_flight;
+  m.memory = pipeline_memory_within(limit, seq, plan, gi, write, threads, m.frames_in_flight_asked);
+  m.estimate = estimate_run_memory(seq, plan, gi, write, threads, m.memory);
+  return m;
+}
+
+std::string memory_limit_text(const MemoryLimit& limit) {
+  return limit.bytes ? memory_size_text(limit.bytes) + " from " + limit.source
+                     : std::string("none (no --max-memory, no scheduler limit)");
+}
+
+}  // namespace ssgi
