@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "memory_plan.h"
 #include "run_options.h"
 #include "simd.h"
 #include "ssgi/color.h"
@@ -24,9 +25,9 @@ using Json = nlohmann::ordered_json;
 void print_help() {
   std::printf(
       "usage: ssgi info INPUT [options]\n\n"
-      "Prints the resolution, windows, frames, detected layout and channels, cameras\n"
-      "and the processing plan for the options given (those of 'ssgi run': the plan\n"
-      "depends on them).\n\n"
+      "Prints the resolution, windows, frames, detected layout and channels, cameras,\n"
+      "the processing plan and the run's estimated peak memory for the options given\n"
+      "(those of 'ssgi run': the plan and the memory depend on them).\n\n"
       "%s",
       options_help(kInfoCommand).c_str());
 }
@@ -51,7 +52,8 @@ struct Report {
   std::string preset;                                         // --preset, resolved
   std::vector<std::pair<std::string, std::string>> settings;  // with the options applied
   std::optional<ssgi::Plan> plan;
-  std::optional<ssgi::Error> problem;  // the first input problem, reported last
+  std::optional<ssgi::MemoryPlan> memory;  // as run plans it; none without a plan
+  std::optional<ssgi::Error> problem;      // the first input problem, reported last
   // --check: each frame decoded as run would (error empty when it read), and the environment.
   struct FrameCheck {
     int frame;
@@ -72,6 +74,21 @@ Json window_json(const ssgi::Box2i& b) {
 // "file: what", as the error line names it.
 std::string error_text(const ssgi::Error& e) {
   return e.file().empty() ? e.what() : e.file() + ": " + e.what();
+}
+
+// The run's memory plan: null without a plan.
+Json memory_json(const Report& r) {
+  if (!r.memory) return nullptr;
+  const ssgi::MemoryPlan& m = *r.memory;
+  return {{"estimated_peak_bytes", m.estimate.bytes},
+          {"estimated_peak", ssgi::memory_size_text(m.estimate.bytes)},
+          {"parts", m.estimate.parts},
+          {"limit", m.limit.bytes ? Json({{"bytes", m.limit.bytes}, {"from", m.limit.source}})
+                                  : Json(nullptr)},
+          {"frames_in_flight", m.memory.frames_in_flight},
+          {"frames_in_flight_asked", m.frames_in_flight_asked},
+          {"read_twice", m.memory.read_twice},
+          {"refused", m.over_limit()}};
 }
 
 // --check's findings: null without it.
@@ -134,12 +151,35 @@ void print_json(const ssgi::InputOptions& in, const ssgi::SequenceInfo& seq, con
       {"preset", r.preset},
       {"settings", settings},
       {"threads", {{"count", r.threads.threads}, {"from", r.threads.source}}},
+      {"memory", memory_json(r)},
       {"simd", {{"target", r.simd}, {"available", r.simd_targets}}},
       {"plan", r.plan ? Json(r.plan->reasons) : Json(nullptr)},
       {"check", check_json(r)},
       {"error", r.problem ? Json(error_text(*r.problem)) : Json(nullptr)},
   };
   std::printf("%s\n", out.dump(2).c_str());
+}
+
+// The run's memory plan, the first line as run -v logs it.
+void print_memory(const Report& r) {
+  if (!r.memory) {
+    std::printf("memory:        not estimated: the plan cannot be made\n");
+    return;
+  }
+  const ssgi::MemoryPlan& m = *r.memory;
+  std::printf("memory:        estimated peak %s; limit %s\n",
+              ssgi::memory_size_text(m.estimate.bytes).c_str(),
+              ssgi::memory_limit_text(m.limit).c_str());
+  std::printf("  parts          %s\n", m.estimate.parts.c_str());
+  const int in_flight = m.memory.frames_in_flight;
+  std::printf("  in flight      %d frame%s read, lit and written at once", in_flight,
+              in_flight == 1 ? "" : "s");
+  std::printf(" (%s)\n", m.reason().c_str());
+  std::printf("  decoded        %s\n", m.memory.read_twice
+                                         ? "twice a frame (lit, then finished and written)"
+                                         : "once a frame");
+  if (m.over_limit())
+    std::printf("  refused        over the limit: ssgi run would refuse the run (exit 3)\n");
 }
 
 void print_text(const ssgi::InputOptions& in, const ssgi::SequenceInfo& seq, const Report& r) {
@@ -187,6 +227,7 @@ void print_text(const ssgi::InputOptions& in, const ssgi::SequenceInfo& seq, con
   for (const auto& [name, value] : r.settings)
     std::printf("  %-14s %s\n", name.c_str(), value.c_str());
   std::printf("threads:       %d (%s)\n", r.threads.threads, r.threads.source.c_str());
+  print_memory(r);
   std::string targets;
   for (const std::string& t : r.simd_targets) targets += (targets.empty() ? "" : ", ") + t;
   std::printf("simd:          %s (--simd: %s)\n", r.simd.c_str(), targets.c_str());
@@ -241,6 +282,8 @@ int run_info(int argc, char** argv) {
   r.settings = ssgi::describe_settings(o.run.gi);
   try {
     r.plan = ssgi::make_plan(seq, o.run.gi);
+    r.memory = ssgi::plan_run_memory(seq, o.run.gi, o.run.write, o.run.memory_limit,
+                                     o.run.frames_in_flight);
     for (const std::string& warning : r.plan->warnings) ssgi::log_warning(warning);
     // What the run's colour management would decide (the config is loaded, nothing converted).
     const ssgi::ColorManagement color = ssgi::color_management_for(o.run.gi.color, seq);

@@ -31,10 +31,11 @@ std::uint64_t resident_bytes() {
 
 namespace ssgi_cli {
 
-void keep_allocator_within(std::uint64_t process_bytes) {
-  if (process_bytes == 0) return;
+void keep_allocator_within(std::uint64_t process_bytes, bool least) {
+  if (process_bytes == 0 && !least) return;
   const std::uint64_t now = resident_bytes();
-  // A limit the process is already over still asks the allocator to keep as little as it can.
+  // The least memory, or a limit the process is already over, asks the allocator to keep as
+  // little as it can.
   const std::uint64_t heap = process_bytes > now ? process_bytes - now : 1;
   scalable_allocation_mode(TBBMALLOC_SET_SOFT_HEAP_LIMIT, static_cast<intptr_t>(heap));
   // And no frame-sized block kept for reuse: under a limit memory counts more than the page

@@ -12,10 +12,13 @@ namespace ssgi_cli {
 // a run over the limit (at 1080p it would keep each phase's planes: 600 against 440 MB
 // measured). Nothing with glibc's allocator, which
 // returns large blocks itself.
+// A process_bytes of 0 is no limit: the allocator then keeps what it frees, for speed, unless
+// `least` (a run without a limit takes the least memory: pipeline_memory_within), when it gives
+// back all it can.
 #if SSGI_FAST_MALLOC
-void keep_allocator_within(std::uint64_t process_bytes);
+void keep_allocator_within(std::uint64_t process_bytes, bool least = false);
 #else
-inline void keep_allocator_within(std::uint64_t) {}
+inline void keep_allocator_within(std::uint64_t, bool = false) {}
 #endif
 
 }  // namespace ssgi_cli

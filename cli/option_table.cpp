@@ -247,8 +247,13 @@ const std::vector<OptionSpec> kTable = {
      "(500M, 2G or bytes; default: the scheduler's limit, Slurm's allocation or the cgroup's; "
      "-v says which)",
      nullptr},
+    {kMaxMemory, "max-memory", 0, "SIZE", OptionGroup::kGeneral, kInfoCommand,
+     "plan the run under SIZE: the memory section says how it fits (fewer frames in flight, "
+     "frames read twice) or that run would refuse it (500M, 2G or bytes; default: the "
+     "scheduler's limit, Slurm's allocation or the cgroup's)",
+     nullptr},
     {kFramesInFlight, "frames-in-flight", 0, "N", OptionGroup::kGeneral,
-     kRunCommand | kReferenceCommand,
+     kRunCommand | kInfoCommand | kReferenceCommand,
      "frames read, lit and written at once: 1 (one after the other, the least memory) to 3; "
      "fewer when --max-memory needs it",
      [](const RunOptions&) { return std::to_string(ssgi::PipelineMemory().frames_in_flight); }},

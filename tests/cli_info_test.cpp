@@ -1,10 +1,12 @@
-// `ssgi info`: the report on a sequence (text and JSON), layout detection, channel flags and
-// --check's decoding of every frame.
+// `ssgi info`: the report on a sequence (text and JSON), layout detection, channel flags,
+// --check's decoding of every frame and the run's memory plan.
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <regex>
 #include <set>
 #include <string>
 #include <vector>
@@ -149,6 +151,147 @@ TEST_F(Cli, InfoCheckDecodesEveryFrameAsRunWould) {
   EXPECT_EQ(none.exit_code, 4);
   EXPECT_EQ(nlohmann::json::parse(none.out)["error"],
             path("nothing.####.exr") + ": no files match this pattern");
+}
+
+// The memory line `ssgi run -v` logs, or info's first memory line: the estimated peak, its parts
+// (run's only) and the limit, as text.
+struct MemoryLine {
+  std::string peak, parts, limit;
+};
+
+MemoryLine memory_line(const std::string& text) {
+  static const std::regex run_line(
+      R"(ssgi: memory: estimated peak ([^(\n]+) \((.*)\); limit (.*))");
+  static const std::regex info_line(R"(\nmemory: +estimated peak ([^;\n]+); limit (.*))");
+  std::smatch m;
+  if (std::regex_search(text, m, run_line)) return {m[1], m[2], m[3]};
+  if (std::regex_search(text, m, info_line)) return {m[1], "", m[2]};
+  return {};
+}
+
+TEST_F(Cli, InfoPlansTheRunsMemoryAsRunDoes) {
+  // Three frames of the sample on 2 threads: the estimate counts each worker. A limit far above
+  // the estimate keeps a scheduler's out of the numbers.
+  const std::string in = testdata("sample/sample.####.exr");
+  const std::vector<std::string> common = {"--frames", "1-3", "--threads", "2"};
+  const auto info = [&](const std::vector<std::string>& flags) {
+    std::vector<std::string> args = {"info", in};
+    args.insert(args.end(), common.begin(), common.end());
+    args.insert(args.end(), flags.begin(), flags.end());
+    return run_ssgi(args);
+  };
+  const auto info_json = [&](std::vector<std::string> flags) {
+    flags.push_back("--json");
+    const CliResult r = info(flags);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return nlohmann::json::parse(r.out)["memory"];
+  };
+  const auto bytes = [](const nlohmann::json& m) {
+    return m["estimated_peak_bytes"].get<std::uint64_t>();
+  };
+
+  const nlohmann::json roomy = info_json({"--max-memory", "64G"});
+  const std::uint64_t full = bytes(roomy);
+  // At 96 x 64 the program and its 2 workers' stacks and buffers are most of it.
+  EXPECT_GT(full, 64u << 20);
+  EXPECT_LT(full, 1u << 30);
+  EXPECT_EQ(roomy["limit"]["bytes"], std::uint64_t{64} << 30);
+  EXPECT_EQ(roomy["limit"]["from"], "--max-memory");
+  // Under a limit that fits it, the fastest plan: two frames in flight, each decoded once.
+  EXPECT_EQ(roomy["frames_in_flight"], 2);
+  EXPECT_EQ(roomy["frames_in_flight_asked"], 0);
+  EXPECT_EQ(roomy["read_twice"], false);
+  EXPECT_EQ(roomy["refused"], false);
+  EXPECT_EQ(roomy["parts"].get<std::string>().find("read twice"), std::string::npos)
+      << roomy["parts"];
+  // Without passthrough, or one frame at a time, the run holds less.
+  EXPECT_LT(bytes(info_json({"--max-memory", "64G", "--no-passthrough"})), full);
+  const nlohmann::json one = info_json({"--max-memory", "64G", "--frames-in-flight", "1"});
+  EXPECT_LT(bytes(one), full);
+  EXPECT_EQ(one["frames_in_flight_asked"], 1);
+
+  // A limit a byte below the estimate: the second frame in flight goes first, the frames are
+  // still read once.
+  const std::string below_full = std::to_string(full - 1);
+  const nlohmann::json fewer = info_json({"--max-memory", below_full});
+  EXPECT_EQ(fewer["frames_in_flight"], 1);
+  EXPECT_EQ(fewer["frames_in_flight_asked"], 0);
+  EXPECT_EQ(fewer["read_twice"], false);
+  EXPECT_EQ(fewer["refused"], false);
+  EXPECT_LT(bytes(fewer), full);
+  EXPECT_EQ(bytes(fewer), bytes(one));
+  // A byte below that: the two waiting frames' passes go, read twice.
+  const std::string below_fewer = std::to_string(bytes(fewer) - 1);
+  const nlohmann::json twice = info_json({"--max-memory", below_fewer});
+  EXPECT_EQ(twice["frames_in_flight"], 1);
+  EXPECT_EQ(twice["read_twice"], true);
+  EXPECT_EQ(twice["refused"], false);
+  EXPECT_LT(bytes(twice), bytes(fewer));
+  EXPECT_NE(twice["parts"].get<std::string>().find("read twice"), std::string::npos)
+      << twice["parts"];
+  // A byte below the least the run can hold: refused by run, reported by info (exit 0).
+  const std::string below_twice = std::to_string(bytes(twice) - 1);
+  EXPECT_EQ(info_json({"--max-memory", below_twice})["refused"], true);
+
+  // The text says the same.
+  CliResult r = info({"--max-memory", below_full});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const MemoryLine line = memory_line(r.out);
+  EXPECT_EQ(line.peak, fewer["estimated_peak"]) << r.out;
+  EXPECT_NE(line.limit.find("iB from --max-memory"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(" from --max-memory\n  parts          " + fewer["parts"].get<std::string>() +
+                       "\n  in flight      1 frame read, lit and written at once (to fit the "
+                       "limit)\n  decoded        once a frame\n"),
+            std::string::npos)
+      << r.out;
+  r = info({"--max-memory", below_fewer});
+  EXPECT_NE(r.out.find("\n  decoded        twice a frame (lit, then finished and written)\n"),
+            std::string::npos)
+      << r.out;
+  EXPECT_EQ(r.out.find("\n  refused"), std::string::npos) << r.out;
+  r = info({"--max-memory", below_twice});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(
+      r.out.find("\n  refused        over the limit: ssgi run would refuse the run (exit 3)\n"),
+      std::string::npos)
+      << r.out;
+
+  // run -v logs the same plan for the same options: the estimate, its parts and the limit (the
+  // scheduler's or none when no --max-memory is given), and the fewer frames or the second
+  // reading; over the limit it refuses with the estimate info gave.
+  const std::vector<std::vector<std::string>> cases = {
+      {}, {"--no-passthrough"}, {"--max-memory", below_full}, {"--max-memory", below_fewer}};
+  for (const std::vector<std::string>& flags : cases) {
+    std::string what;
+    for (const std::string& f : flags) what += f + " ";
+    const nlohmann::json planned = info_json(flags);
+    const MemoryLine info_text = memory_line(info(flags).out);
+    std::vector<std::string> args = {"run", in, "-o", path("o.####.exr"), "-v"};
+    args.insert(args.end(), common.begin(), common.end());
+    args.insert(args.end(), flags.begin(), flags.end());
+    const CliResult ran = run_ssgi(args);
+    ASSERT_EQ(ran.exit_code, 0) << what << ran.err;
+    const MemoryLine logged = memory_line(ran.err);
+    ASSERT_FALSE(logged.peak.empty()) << what << ran.err;
+    EXPECT_EQ(logged.peak, planned["estimated_peak"]) << what;
+    EXPECT_EQ(logged.parts, planned["parts"]) << what;
+    EXPECT_EQ(logged.peak, info_text.peak) << what;
+    EXPECT_EQ(logged.limit, info_text.limit) << what;
+    EXPECT_EQ(ran.err.find("memory: 1 frame in flight") != std::string::npos,
+              planned["frames_in_flight"] == 1)
+        << what << ran.err;
+    EXPECT_EQ(ran.err.find("each frame written decoded twice") != std::string::npos,
+              planned["read_twice"] == true)
+        << what << ran.err;
+  }
+  std::vector<std::string> args = {"run",          in,         "-o", path("o.####.exr"),
+                                   "--max-memory", below_twice};
+  args.insert(args.end(), common.begin(), common.end());
+  const CliResult refused = run_ssgi(args);
+  EXPECT_EQ(refused.exit_code, 3);
+  expect_one_error(refused, testdata("sample/sample.0001.exr"),
+                   "the run needs an estimated " + twice["estimated_peak"].get<std::string>() +
+                       " (" + twice["parts"].get<std::string>() + "), over the limit of ");
 }
 
 }  // namespace

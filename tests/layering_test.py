@@ -24,7 +24,7 @@ WINGS = {
     "compare": 3, "reference": 3,
     "pipeline": 4,
     "sequence_processor": 5,
-    "run": 6, "memory": 6, "threads": 6, "simd": 6,
+    "run": 6, "memory": 6, "memory_plan": 6, "threads": 6, "simd": 6,
 }
 
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"')

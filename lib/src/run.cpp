@@ -12,7 +12,7 @@
 #include "frame_stages.h"
 #include "io/preview.h"
 #include "memory.h"
-#include "parallel.h"
+#include "memory_plan.h"
 #include "sequence_processor.h"
 #include "ssgi/log.h"
 #include "ssgi/settings.h"
@@ -92,33 +92,21 @@ std::string settings_text(const RunOptions& o, const SequenceInfo& seq) {
 // The pipeline's memory under the run's limit; throws Error(kInput) when the estimated peak is
 // over the limit.
 PipelineMemory check_memory(const RunOptions& o, const SequenceInfo& seq) {
-  const Plan plan = make_plan(seq, o.gi);
-  const int threads = detail::worker_threads();
-  const MemoryLimit& limit = o.memory_limit;
-  const PipelineMemory memory =
-      pipeline_memory_within(limit, seq, plan, o.gi, o.write, threads, o.frames_in_flight);
-  const MemoryEstimate need = estimate_run_memory(seq, plan, o.gi, o.write, threads, memory);
-  log_info("memory: estimated peak " + memory_size_text(need.bytes) + " (" + need.parts +
-           "); limit " +
-           (limit.bytes ? memory_size_text(limit.bytes) + " from " + limit.source
-                        : std::string("none (no --max-memory, no scheduler limit)")));
-  if (limit.bytes && need.bytes > limit.bytes)
+  const MemoryPlan m = plan_run_memory(seq, o.gi, o.write, o.memory_limit, o.frames_in_flight);
+  const PipelineMemory& memory = m.memory;
+  log_info("memory: estimated peak " + memory_size_text(m.estimate.bytes) + " (" +
+           m.estimate.parts + "); limit " + memory_limit_text(m.limit));
+  if (m.over_limit())
     throw Error(ErrorKind::kInput, seq.pattern.path_for(seq.frames.front()),
-                "the run needs an estimated " + memory_size_text(need.bytes) + " (" + need.parts +
-                    "), over the limit of " + memory_size_text(limit.bytes) + " from " +
-                    limit.source);
-  const std::string why = limit.bytes ? "to fit the limit"
-                          : o.frames_in_flight > 0
-                              ? "as asked"
-                              : "the least memory; a --max-memory above it lets the "
-                                "run overlap frames and keep them, to go faster";
+                "the run needs an estimated " + memory_size_text(m.estimate.bytes) + " (" +
+                    m.estimate.parts + "), over the limit of " + memory_limit_text(m.limit));
   log_info("memory: " + std::to_string(memory.frames_in_flight) + " frame" +
            (memory.frames_in_flight > 1 ? "s" : "") + " in flight" +
            (memory.read_twice ? ", each frame written decoded twice (lit, then finished and "
                                 "written) so that the frames waiting for their window's later "
                                 "frames hold no passes"
                               : "") +
-           " (" + why + ")");
+           " (" + m.reason() + ")");
   if (o.gi.tracer == Tracer::kReference && o.gi.bounces > 1)
     log_info("memory: the reference keeps up to " + memory_size_text(memory.reference_hits_bytes) +
              " of hits for bounces after the first; rows beyond that are traced again");
