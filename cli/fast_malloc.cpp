@@ -6,9 +6,6 @@
 #include "fast_malloc.h"
 
 #include <oneapi/tbb/scalable_allocator.h>
-#include <unistd.h>
-
-#include <cstdio>
 
 namespace {
 
@@ -17,29 +14,15 @@ const bool kHugeBlocksKept = [] {
   return true;
 }();
 
-// The process's resident size now, from /proc/self/statm; 0 when unknown.
-std::uint64_t resident_bytes() {
-  std::FILE* f = std::fopen("/proc/self/statm", "r");
-  if (f == nullptr) return 0;
-  unsigned long long size = 0, resident = 0;
-  const bool ok = std::fscanf(f, "%llu %llu", &size, &resident) == 2;
-  std::fclose(f);
-  return ok ? resident * static_cast<std::uint64_t>(sysconf(_SC_PAGESIZE)) : 0;
-}
-
 }  // namespace
 
 namespace ssgi_cli {
 
-void keep_allocator_within(std::uint64_t process_bytes, bool least) {
-  if (process_bytes == 0 && !least) return;
-  const std::uint64_t now = resident_bytes();
-  // The least memory, or a limit the process is already over, asks the allocator to keep as
-  // little as it can.
-  const std::uint64_t heap = process_bytes > now ? process_bytes - now : 1;
-  scalable_allocation_mode(TBBMALLOC_SET_SOFT_HEAP_LIMIT, static_cast<intptr_t>(heap));
-  // And no frame-sized block kept for reuse: under a limit memory counts more than the page
-  // faults of fresh blocks (1080p, --max-memory 640M: peak 548 -> 482 MB, 17.8 -> 18.0 s).
+void keep_no_freed_blocks() {
+  // A soft heap limit the process is always over has the allocator give back what it can.
+  scalable_allocation_mode(TBBMALLOC_SET_SOFT_HEAP_LIMIT, 1);
+  // And no frame-sized block kept for reuse: here memory counts more than the page faults of
+  // fresh blocks (1080p, --max-memory 640M: peak 548 -> 482 MB, 17.8 -> 18.0 s).
   scalable_allocation_mode(TBBMALLOC_SET_HUGE_SIZE_THRESHOLD, static_cast<intptr_t>(1) << 40);
 }
 

@@ -6,19 +6,15 @@
 
 namespace ssgi_cli {
 
-// Under a memory limit for the whole process: the allocator keeps no frame-sized block for
-// reuse, and gives the smaller ones it keeps back to the kernel whenever it holds more than the
-// limit leaves beside what the process holds now (its libraries), so that its cache never takes
-// a run over the limit (at 1080p it would keep each phase's planes: 600 against 440 MB
-// measured). Nothing with glibc's allocator, which
-// returns large blocks itself.
-// A process_bytes of 0 is no limit: the allocator then keeps what it frees, for speed, unless
-// `least` (a run without a limit takes the least memory: pipeline_memory_within), when it gives
-// back all it can.
+// The allocator gives back every block it frees instead of keeping frame-sized ones for reuse:
+// for a run under a memory limit or taking the least memory, whose peak is then its largest
+// phase's rather than the phases' sum (pipeline_memory_within, PipelineMemory::freed_blocks_kept;
+// at 1080p 371 against 617 MB). Nothing with glibc's allocator, which returns large blocks
+// itself.
 #if SSGI_FAST_MALLOC
-void keep_allocator_within(std::uint64_t process_bytes, bool least = false);
+void keep_no_freed_blocks();
 #else
-inline void keep_allocator_within(std::uint64_t, bool = false) {}
+inline void keep_no_freed_blocks() {}
 #endif
 
 }  // namespace ssgi_cli

@@ -179,12 +179,12 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
   const double read = role_planes(plan.roles);
   const double motion = (plan.roles & role_bit(Role::kMotion)) ? 4 : 0;
   const std::uint64_t strip = 16 * kMiB;
-  std::uint64_t frame = planes(read, pixels) + strip;
+  RoleMask lit_roles = plan.roles;
   if (read_twice) {
-    RoleMask traced = plan.roles & ~role_bit(Role::kBeauty);
-    if (!plan.gather_emission) traced &= ~role_bit(Role::kEmission);
-    frame = std::max(planes(role_planes(traced), pixels), planes(read - motion, pixels)) + strip;
+    lit_roles &= ~role_bit(Role::kBeauty);
+    if (!plan.gather_emission) lit_roles &= ~role_bit(Role::kEmission);
   }
+  const std::uint64_t frame = planes(role_planes(lit_roles), pixels) + strip;
   // The temporal ring: every frame of the window on the trace grid (its light, coverage, depth,
   // normal and motion: 12 planes; in the window its misses' shares and reflected light, 6
   // more, and the levelled light of each while the centre is filtered, 3), and the frames
@@ -235,46 +235,69 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
   // The denoiser's pyramid and guides at full resolution when the light enters it there; from
   // a coarser trace grid, only the depths whole, the coarser levels (a third of a plane per
   // plane of the half-resolution level's 6 guides and light) and the light upsampled (the
-  // last two levels' 3 planes each): 9 planes. Then the composite's four layers (indirect,
-  // gi, composite, coverage: 11 planes) beside the frame's light.
+  // last two levels' 3 planes each, the last the frame's light): 9 planes. Beside them the
+  // coverage (1), and the composite's gi and composite (7) unless they are written over the
+  // passes' albedo and beauty (composite_frame_in_place).
   const std::uint64_t denoise =
       scale > 1 ? planes(9, pixels) : (plan.denoise ? planes(24, pixels) : 0);
-  const std::uint64_t composite = planes(14, pixels);
-  // The writer encodes strips of rows: ours and the passed-through channels (16 MB), which it
-  // reads from the input's file a strip at a time (as much again).
-  const std::uint64_t writer = strip + (write.passthrough ? strip : 0);
+  const std::uint64_t composite = planes(memory.passes_read_after_composite ? 8 : 1, pixels);
+  // The writer encodes strips of rows of ours and the passed-through channels (16 MB at most),
+  // which it reads from the input's file a strip at a time.
+  std::uint64_t input_bytes = 0;
+  for (const auto& c : seq.channels.channels) input_bytes += 4 * c.size();
+  const std::uint64_t own_pixels =
+      static_cast<std::uint64_t>(seq.data_window.width()) * seq.data_window.height();
+  const auto strip_of = [&](std::uint64_t whole) { return std::min(strip, whole); };
+  const std::uint64_t writer = strip_of(own_pixels * (44 + (write.passthrough ? input_bytes : 0))) +
+                               (write.passthrough ? strip_of(own_pixels * input_bytes) : 0);
+  // A frame's phases, one after the other: lit (read, traced), finished (its passes, the
+  // denoiser's upsampling, the composite), written (the four layers, 11 planes, and the strips).
+  // A frame being finished holds its passes: in the window without motion (read again, or kept
+  // since it was lit), else as read.
+  const std::uint64_t finishing_passes =
+      planes(plan.temporal == TemporalMode::kWindow ? read - motion : read, pixels);
+  const std::uint64_t lighting = frame + tracing + multiframe;
+  const std::uint64_t finishing = finishing_passes + denoise + composite;
+  const std::uint64_t writing = planes(11, pixels) + writer;
+  // The allocator of ssgi's programs keeps what a phase frees for the next (cli/fast_malloc)
+  // unless the run has a limit or takes the least memory; else the phases' peaks do not add.
+  const std::uint64_t phases = memory.freed_blocks_kept ? lighting + finishing + writing
+                                                        : std::max({lighting, finishing, writing});
   // Overlapping, the next frame is read while one is lit and the last written (its layers).
   const int in_flight = std::clamp(memory.frames_in_flight, 1, 3);
-  const std::uint64_t overlap =
-      (in_flight >= 2 ? frame : 0) + (in_flight >= 3 ? planes(11, pixels) + writer : 0);
-  // The program, its libraries and the allocator's pools; per worker its stack and buffers.
-  const std::uint64_t program = 120 * kMiB + static_cast<std::uint64_t>(threads) * 16 * kMiB;
+  const std::uint64_t overlap = (in_flight >= 2 ? frame : 0) + (in_flight >= 3 ? writing : 0);
+  // The program, its libraries (OIIO's plugins, OCIO) and the allocator's pools, and per worker
+  // its stack and buffers: 149 MiB measured on 1 thread, 153 on 2, 158 on 4 for the sample.
+  const std::uint64_t program = 140 * kMiB + static_cast<std::uint64_t>(threads) * 4 * kMiB;
 
   MemoryEstimate e;
-  // The phases of a frame follow one another, but the allocator keeps what each freed, so the
-  // bound adds them.
-  e.bytes = program + ring + frame + tracing + multiframe + denoise + composite + writer + overlap;
-  e.parts = "frames " + memory_size_text(ring + frame) + " (" + std::to_string(ring_frames) +
+  e.bytes = program + ring + phases + overlap;
+  e.parts = "frames " + memory_size_text(ring) + " (" + std::to_string(ring_frames) +
             " in the ring, " +
             (read_twice ? std::string("read twice") : std::to_string(waiting) + " waiting") +
-            "), tracing " + memory_size_text(tracing) +
+            "), lit " + memory_size_text(lighting) + " (read " + memory_size_text(frame) +
+            ", tracing " + memory_size_text(tracing) +
             (multiframe ? ", multiframe " + memory_size_text(multiframe) : std::string()) +
-            ", denoise and composite " + memory_size_text(denoise + composite) + ", writing " +
-            memory_size_text(writer) + ", " + std::to_string(in_flight) + " frames in flight " +
-            memory_size_text(overlap) + ", program " + memory_size_text(program);
+            "), finished " + memory_size_text(finishing) + ", written " +
+            memory_size_text(writing) + (memory.freed_blocks_kept ? ", one after another" : "") +
+            ", " + std::to_string(in_flight) + " frame" + (in_flight > 1 ? "s" : "") +
+            " in flight " + memory_size_text(overlap) + ", program " + memory_size_text(program);
   return e;
 }
 
 PipelineMemory pipeline_memory_within(const MemoryLimit& limit, const SequenceInfo& seq,
                                       const Plan& plan, const GiSettings& s,
-                                      const WriteOptions& write, int threads,
-                                      int frames_in_flight) {
+                                      const WriteOptions& write, int threads, int frames_in_flight,
+                                      bool passes_read_after_composite) {
   PipelineMemory memory;
+  memory.passes_read_after_composite = passes_read_after_composite;
   const bool asked = frames_in_flight > 0;
   memory.frames_in_flight = asked ? std::clamp(frames_in_flight, 1, 3) : 2;
   const bool window = plan.temporal == TemporalMode::kWindow;
   if (limit.bytes == 0) {
-    if (!asked) {
+    if (asked) {
+      memory.freed_blocks_kept = true;
+    } else {
       memory.frames_in_flight = 1;
       memory.read_twice = window;
     }

@@ -59,10 +59,11 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& sequence, const Plan& pla
 // (up to `frames_in_flight`, else 2) as the estimate fits, and when one does not, the window's
 // frames read twice with as many. The reference keeps at most 1 GiB of hits, and no more than
 // what the limit leaves beside the rest of the run (as little as none: then each bounce traces
-// again).
+// again). `passes_read_after_composite` is PipelineMemory's.
 PipelineMemory pipeline_memory_within(const MemoryLimit& limit, const SequenceInfo& sequence,
                                       const Plan& plan, const GiSettings& settings,
                                       const WriteOptions& write, int threads,
-                                      int frames_in_flight = 0);
+                                      int frames_in_flight = 0,
+                                      bool passes_read_after_composite = false);
 
 }  // namespace ssgi

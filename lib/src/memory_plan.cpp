@@ -8,13 +8,15 @@
 namespace ssgi {
 
 MemoryPlan plan_run_memory(const SequenceInfo& seq, const GiSettings& gi, const WriteOptions& write,
-                           const MemoryLimit& limit, int frames_in_flight) {
+                           const MemoryLimit& limit, int frames_in_flight,
+                           bool passes_read_after_composite) {
   const Plan plan = make_plan(seq, gi);
   const int threads = detail::worker_threads();
   MemoryPlan m;
   m.limit = limit;
   m.frames_in_flight_asked = std::max(0, frames_in_flight);
-  m.memory = pipeline_memory_within(limit, seq, plan, gi, write, threads, m.frames_in_flight_asked);
+  m.memory = pipeline_memory_within(limit, seq, plan, gi, write, threads, m.frames_in_flight_asked,
+                                    passes_read_after_composite);
   m.estimate = estimate_run_memory(seq, plan, gi, write, threads, m.memory);
   return m;
 }

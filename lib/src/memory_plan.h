@@ -30,7 +30,7 @@ struct MemoryPlan {
 // Throws what make_plan throws.
 MemoryPlan plan_run_memory(const SequenceInfo& sequence, const GiSettings& gi,
                            const WriteOptions& write, const MemoryLimit& limit,
-                           int frames_in_flight);
+                           int frames_in_flight, bool passes_read_after_composite = false);
 
 // "500 MiB from --max-memory", or "none (no --max-memory, no scheduler limit)".
 std::string memory_limit_text(const MemoryLimit& limit);

@@ -90,9 +90,11 @@ std::string settings_text(const RunOptions& o, const SequenceInfo& seq) {
 }
 
 // The pipeline's memory under the run's limit; throws Error(kInput) when the estimated peak is
-// over the limit.
-PipelineMemory check_memory(const RunOptions& o, const SequenceInfo& seq) {
-  const MemoryPlan m = plan_run_memory(seq, o.gi, o.write, o.memory_limit, o.frames_in_flight);
+// over the limit. `passes_read_after_composite`: PipelineMemory's.
+PipelineMemory check_memory(const RunOptions& o, const SequenceInfo& seq,
+                            bool passes_read_after_composite) {
+  const MemoryPlan m = plan_run_memory(seq, o.gi, o.write, o.memory_limit, o.frames_in_flight,
+                                       passes_read_after_composite);
   const PipelineMemory& memory = m.memory;
   log_info("memory: estimated peak " + memory_size_text(m.estimate.bytes) + " (" +
            m.estimate.parts + "); limit " + memory_limit_text(m.limit));
@@ -130,7 +132,9 @@ RunReport run_sequence(const RunOptions& options, const RunCallbacks& callbacks)
     return pattern;
   };
   // Over the memory limit: refused before the outputs' directories are made.
-  const PipelineMemory memory = check_memory(options, seq);
+  // A callback or the preview reads a frame's passes after its composite.
+  const PipelineMemory memory =
+      check_memory(options, seq, callbacks.on_result || !options.preview.empty());
   const SequencePattern out = output_pattern(options.output, "output");
   const SequencePattern preview = output_pattern(options.preview, "--preview");
   const bool write_exr = !options.output.empty(), write_preview = !options.preview.empty();

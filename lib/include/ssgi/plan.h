@@ -35,15 +35,20 @@ struct PipelineMemory {
   std::size_t reference_hits_bytes = std::size_t{1} << 30;
   // Frames between reading and writing at once in run_sequence: 3 reads the next frame and
   // writes the last while lighting one; 2 overlaps two of those; 1 does one after the other.
-  // 2 by default: as fast as 3 on a 1080p shot (2 cores), 90 MB less without passthrough and
-  // 430 MB less with it (tests/bench/end_to_end.sh; README, Speed and memory).
+  // pipeline_memory_within chooses (1 without a limit, the least memory).
   int frames_in_flight = 2;
-  // The symmetric window finishes a frame only after its later neighbours are lit. Kept (the
-  // default), a frame waiting for them holds its full-resolution passes (with passthrough, its
-  // input's pixels); read twice, it holds only its light on the trace grid and is decoded again
-  // to be finished and written: the least memory, for a second decoding of each frame written
-  // (the same bits either way).
+  // The symmetric window finishes a frame only after its later neighbours are lit. Kept, a frame
+  // waiting for them holds its full-resolution passes; read twice, it holds only its light on
+  // the trace grid and is decoded again to be finished: the least memory, for a second decoding
+  // of each frame written (the same bits either way).
   bool read_twice = false;
+  // Whether a frame's passes are read after its composite (a callback, the preview): the
+  // composite is then written beside them rather than over them.
+  bool passes_read_after_composite = false;
+  // Whether the program's allocator keeps the blocks a frame's phase frees for the next (as
+  // ssgi's own programs do, for speed, when a run has no limit and asks for frames in flight):
+  // the estimate then adds the phases' peaks.
+  bool freed_blocks_kept = false;
 };
 
 // A memory limit and what set it; bytes 0: none.
