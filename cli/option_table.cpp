@@ -243,9 +243,10 @@ const std::vector<OptionSpec> kTable = {
     {kThreads, "threads", 0, "N", OptionGroup::kGeneral, kReading,
      "worker threads (default: the scheduler's allocation, else the CPUs allowed)", nullptr},
     {kMaxMemory, "max-memory", 0, "SIZE", OptionGroup::kGeneral, kRunCommand | kReferenceCommand,
-     "refuse the run, before computing anything, if its estimated peak memory is over SIZE "
-     "(500M, 2G or bytes; default: the scheduler's limit, Slurm's allocation or the cgroup's; "
-     "-v says which)",
+     "the most memory the run may take: the fastest plan whose estimated peak fits SIZE, and a "
+     "refusal before computing anything when none does (500M, 2G or bytes; default: the "
+     "scheduler's limit, Slurm's allocation or the cgroup's, else none: the least memory; -v "
+     "says which)",
      nullptr},
     {kMaxMemory, "max-memory", 0, "SIZE", OptionGroup::kGeneral, kInfoCommand,
      "plan the run under SIZE: the memory section says how it fits (fewer frames in flight, "
@@ -254,9 +255,10 @@ const std::vector<OptionSpec> kTable = {
      nullptr},
     {kFramesInFlight, "frames-in-flight", 0, "N", OptionGroup::kGeneral,
      kRunCommand | kInfoCommand | kReferenceCommand,
-     "frames read, lit and written at once: 1 (one after the other, the least memory) to 3; "
-     "fewer when --max-memory needs it",
-     [](const RunOptions&) { return std::to_string(ssgi::PipelineMemory().frames_in_flight); }},
+     "frames read, lit and written at once: 1 (one after the other, the least memory) to 3, "
+     "the window's frames kept rather than read twice; fewer when --max-memory needs it "
+     "(default: as many as the limit fits, up to 2; without a limit 1, the frames read twice)",
+     nullptr},
     {kSimd, "simd", 0, "TARGET", OptionGroup::kGeneral, kReading,
      "the kernels' instruction set: auto, a target this CPU has (avx2, sse4, ...; ssgi info "
      "lists them) or scalar; every one gives the same bits (default: $SSGI_SIMD, else auto)",

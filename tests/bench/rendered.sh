@@ -4,9 +4,10 @@
 # six frames at few samples (the passes' size and the GI's cost do not depend on the sample
 # count), with the training set's 30 float channels, ZIP, cameras in the headers. Per
 # resolution, the runs interleaved round by round so that a noisy machine weighs on all alike:
-#   - `ssgi run SHOT -o OUT` with default settings (passthrough, window +-2, 2 frames in flight)
-#     and with --no-passthrough: peak resident size (/usr/bin/time %M) against the estimate
-#     `-v` prints ("memory: estimated peak"; `ssgi info` prints the plan, not the memory);
+#   - `ssgi run SHOT -o OUT` with default settings (passthrough, window +-2, no limit: the
+#     least memory), with --frames-in-flight 2 (the fastest) and under a farm slot
+#     sized for the resolution: peak resident size (/usr/bin/time %M) against the estimate `-v`
+#     prints ("memory: estimated peak", as `ssgi info` prints it);
 #   - --no-passthrough --frames-in-flight 1 at --threads 1 and 2: gi_ms from --stats, the median
 #     over every frame of every round, and the ratio of the medians (and of each round's).
 # Prints two markdown tables, each configuration's estimate in parts, and the load average
@@ -36,18 +37,31 @@ for res in "${resolutions[@]}"; do
     > /dev/null
 done
 
-# The runs of a round: `ssgi run`'s options; the last two give the GI's time on 1 and 2 threads.
+# The runs of a round: `ssgi run`'s options. The default takes the least memory (no limit here);
+# --frames-in-flight 2 the most (two frames in flight, the window's frames kept, the allocator
+# keeping what it frees); LIMIT is a farm slot sized for the resolution (500 MB at 1080p, 1.6 GB
+# at 4K, in bytes; none at other sizes); the last two give the GI's time on 1 and 2 threads.
 configs=(
   ""
-  "--no-passthrough"
+  "--frames-in-flight 2"
+  "--max-memory LIMIT"
   "--no-passthrough --frames-in-flight 1 --threads 1"
   "--no-passthrough --frames-in-flight 1 --threads 2"
 )
+slot() {
+  case $1 in
+    1920x1080) echo 500000000 ;;
+    3840x2160) echo 1600000000 ;;
+  esac
+}
 cut -d' ' -f1-3 /proc/loadavg > "$out/load"
 for ((r = 0; r < rounds; ++r)); do
   for res in "${resolutions[@]}"; do
     for i in "${!configs[@]}"; do
-      read -r -a args <<< "${configs[$i]}"
+      limit=$(slot "$res")
+      config=${configs[$i]}
+      [[ -n $limit ]] && config=${config/LIMIT/$limit} || config=${config/--max-memory LIMIT/}
+      read -r -a args <<< "$config"
       tag=$out/$res.$i.$r
       /usr/bin/time -f '%e %U %S %M' -o "$tag.time" "$ssgi" run \
         "$cache/$res/$scene/$scene.####.exr" -o "$out/frames/o.####.exr" -v --stats "$tag.json" \
@@ -80,6 +94,7 @@ def run(res, i, r):
 
 runs = {(res, i): [run(res, i, r) for r in range(rounds)]
         for res in resolutions for i in range(len(configs))}
+slots = {"1920x1080": "500000000", "3840x2160": "1600000000"}
 print(f"| {scene}, 6 frames, {rounds} rounds | `ssgi run` options | peak RSS MiB, median (min-max)"
       " | estimate MiB (-v) | estimate / peak | s/frame, wall (CPU) |")
 print("|---|---|---|---|---|---|")
@@ -87,14 +102,16 @@ for (res, i), rs in runs.items():
     peaks = [x["peak"] for x in rs]
     peak, estimate, frames = statistics.median(peaks), rs[0]["estimate"], len(rs[0]["frames"])
     wall, cpu = (statistics.median(x[k] for x in rs) / frames for k in ("wall", "cpu"))
-    print(f"| {res} | {configs[i] or '(default)'} | **{peak:.0f}** ({min(peaks):.0f}-"
+    config = configs[i].replace("LIMIT", slots.get(res, "none"))
+    print(f"| {res} | {config or '(default)'} | **{peak:.0f}** ({min(peaks):.0f}-"
           f"{max(peaks):.0f}) | {estimate:.0f} | {estimate / peak:.2f} | {wall:.1f} ({cpu:.1f}) |")
 
 print(f"\n| {scene}, --no-passthrough --frames-in-flight 1 | gi_ms 1 thread | gi_ms 2 threads"
       " | 2 threads faster by | each round's |")
 print("|---|---|---|---|---|")
 for res in resolutions:
-    one, two = ([[f["gi_ms"] for f in x["frames"]] for x in runs[res, i]] for i in (2, 3))
+    one, two = ([[f["gi_ms"] for f in x["frames"]] for x in runs[res, i]]
+                for i in (len(configs) - 2, len(configs) - 1))
     median_one, median_two = statistics.median(sum(one, [])), statistics.median(sum(two, []))
     each = ", ".join(f"{statistics.median(a) / statistics.median(b):.2f}" for a, b in zip(one, two))
     print(f"| {res}, median of {len(sum(one, []))} frames | {median_one:.0f} | {median_two:.0f} | "
@@ -102,7 +119,8 @@ for res in resolutions:
 
 print()
 for (res, i), rs in runs.items():
-    print(f"{res} {configs[i] or '(default)'}: {rs[0]['parts']}")
+    print(f"{res} {configs[i].replace('LIMIT', slots.get(res, 'none')) or '(default)'}: "
+          f"{rs[0]['parts']}")
 before, after = open(f"{out}/load").read().splitlines()
 print(f"\nload average (1, 5, 15 min) before: {before}; after: {after}")
 PY
