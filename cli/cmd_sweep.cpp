@@ -138,9 +138,6 @@ double mean(const std::vector<double>& v) {
 ssgi::RunReport run_checked(const ssgi::RunOptions& options) {
   ssgi::RunOptions run = options;
   run.fail_fast = true;
-  // One frame at a time: a frame's gi_ms is then its GI's own time, not shared with the
-  // decoding and encoding of the frames around it.
-  run.frames_in_flight = 1;
   ssgi::RunReport report = ssgi::run_sequence(run);
   for (const ssgi::FrameReport& f : report.frames)
     if (!f.ok)

@@ -1,16 +1,17 @@
 // The programs' allocator (cli/fast_malloc.cpp): oneTBB's scalable allocator, which keeps freed
-// frame-sized blocks for reuse.
+// frame-sized blocks for reuse unless told otherwise.
 #pragma once
 
 #include <cstdint>
 
 namespace ssgi_cli {
 
-// The allocator gives back every block it frees instead of keeping frame-sized ones for reuse:
-// for a run under a memory limit or taking the least memory, whose peak is then its largest
-// phase's rather than the phases' sum (pipeline_memory_within, PipelineMemory::freed_blocks_kept;
-// at 1080p 371 against 617 MB). Nothing with glibc's allocator, which returns large blocks
-// itself.
+// The allocator gives back every block it frees instead of keeping frame-sized ones for reuse,
+// so that a run's peak is its largest phase's (estimate_run_memory) rather than the phases'
+// sum: a farm slot is sized by the peak. Kept, the blocks saved page faults but added one
+// phase's planes to the next (1080p rendered shot, --frames-in-flight 2: 1065 MiB measured
+// against 933 MiB of the phases' largest; tests/bench/rendered.sh). Nothing with glibc's
+// allocator, which returns large blocks itself.
 #if SSGI_FAST_MALLOC
 void keep_no_freed_blocks();
 #else

@@ -334,6 +334,9 @@ ssgi::RunOptions subcommand_defaults(Subcommand s) {
     d.gi.denoise = ssgi::DenoiseMode::kNone;
     d.gi.temporal = ssgi::TemporalMode::kNone;
   }
+  // The sweep runs one frame at a time: a frame's gi_ms is then its GI's own time, not shared
+  // with the decoding and encoding of the frames around it.
+  if (s == kSweepCommand) d.frames_in_flight = 1;
   return d;
 }
 

@@ -398,9 +398,7 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
     ssgi::throw_usage("-v (--verbose) and -q (--quiet) contradict each other");
   if (o.help) return o;
   if (o.run.memory_limit.bytes == 0) o.run.memory_limit = ssgi::scheduler_memory_limit();
-  // Under a limit, or without one and no frames in flight asked for (the least memory:
-  // pipeline_memory_within), the allocator keeps nothing it frees.
-  if (o.run.memory_limit.bytes != 0 || o.run.frames_in_flight == 0) keep_no_freed_blocks();
+  keep_no_freed_blocks();
   // The kernels' target: --simd, else SSGI_SIMD (a bad value of either is a usage error here).
   const bool simd_given = !o.simd.empty();
   if (!simd_given && std::getenv("SSGI_SIMD") != nullptr) o.simd = std::getenv("SSGI_SIMD");

@@ -474,7 +474,8 @@ void write_native_parts(const std::string& path, const std::vector<NativePart>& 
       << path << ": " << (out ? out->geterror() : OIIO::geterror());
   for (std::size_t i = 0; i < parts.size(); ++i) {
     if (i > 0) {
-      ASSERT_TRUE(out->open(path, specs[i], OIIO::ImageOutput::AppendSubimage));
+      ASSERT_TRUE(out->open(path, specs[i], OIIO::ImageOutput::AppendSubimage))
+          << path << " part " << i << ": " << out->geterror();
     }
     ASSERT_TRUE(out->write_image(OIIO::TypeUnknown, parts[i].bytes.data())) << out->geterror();
   }
@@ -594,6 +595,89 @@ TEST_F(Cli, MultiPartInputComesBackInItsOwnTypesPartsAndAttributes) {
   }
   EXPECT_EQ(got[1].spec.get_string_attribute("cryptomatte/3ae39a5/conversion"),
             "uint32_to_float32");
+}
+
+// The input's channels are read from its file again when the frame is written, in strips of whole
+// chunks of about 16 MB: frames of several strips come back byte for byte. A two-part frame, tiled
+// (OIIO writes a multi-part file tiled or scanline throughout): its host part with tiles 48 rows
+// tall, the other with 24 float channels over its own data window in tiles 80 rows tall (the
+// output's strips are rows of the input's tiles). A scanline frame compressed with PIZ, 32
+// scanlines a chunk, written with ZIP's 16 (its strips lcm(32, 16) rows).
+TEST_F(Cli, PassthroughReadStripByStripKeepsEveryByteOfTilesAndTallChunks) {
+  OIIO::ImageBuf sample(testdata("sample/sample.0001.exr"));
+  OIIO::ImageSpec big = sample.spec();
+  big.width = big.full_width = 1024;
+  big.height = big.full_height = 680;
+  OIIO::ImageBuf scaled(big);
+  ASSERT_TRUE(OIIO::ImageBufAlgo::resample(scaled, sample, /*interpolate=*/false));
+  NativePart host;
+  host.spec = scaled.spec();
+  host.spec.channelformats.clear();
+  host.spec.set_format(OIIO::TypeDesc::FLOAT);
+  host.bytes.resize(host.spec.image_bytes(true));
+  ASSERT_TRUE(scaled.get_pixels(OIIO::ROI::All(), OIIO::TypeDesc::FLOAT, host.bytes.data()));
+  ASSERT_GT(host.bytes.size(), std::size_t{48} << 20);  // several strips of 16 MB
+
+  std::vector<NativePart> tiled(2, host);
+  tiled[0].spec.tile_width = 32;
+  tiled[0].spec.tile_height = 48;
+  tiled[0].spec.attribute("oiio:subimagename", "host");
+  tiled[0].spec.attribute("compression", "zip");
+  NativePart& other = tiled[1];
+  other.spec = OIIO::ImageSpec(1000, 600, 24, OIIO::TypeDesc::FLOAT);
+  other.spec.x = 12;
+  other.spec.y = 40;
+  other.spec.full_width = big.full_width;
+  other.spec.full_height = big.full_height;
+  other.spec.tile_width = 40;
+  other.spec.tile_height = 80;
+  other.spec.channelnames.clear();
+  for (int c = 0; c < 24; ++c) other.spec.channelnames.push_back("aov" + std::to_string(c) + ".Y");
+  other.spec.attribute("oiio:subimagename", "aovs");
+  other.spec.attribute("compression", "piz");
+  other.bytes.resize(other.spec.image_bytes(true));
+  for (std::size_t i = 0; i < other.bytes.size() / 4; ++i) {
+    const float v = static_cast<float>(i % 1000003) * 1e-3f;
+    std::memcpy(other.bytes.data() + 4 * i, &v, 4);
+  }
+  write_native_parts(path("tiled.0001.exr"), tiled);
+  NativePart piz = host;
+  piz.spec.attribute("compression", "piz");
+  write_native_parts(path("piz.0001.exr"), {piz});
+
+  for (const char* name : {"tiled", "piz"}) {
+    const std::string in = path(std::string(name) + ".0001.exr");
+    const std::string out = path(std::string(name) + "_out.0001.exr");
+    const CliResult r = run_ssgi({"run", in, "-o", out, "--rays", "2", "-q"});
+    ASSERT_EQ(r.exit_code, 0) << name << r.err;
+    const std::vector<NativePart> input = read_native_parts(in);
+    const std::vector<NativePart> got = read_native_parts(out);
+    ASSERT_EQ(got.size(), input.size()) << name;
+    const OIIO::ImageSpec& made = got[0].spec;
+    EXPECT_EQ(made.tile_height, input[0].spec.tile_height) << name;
+    for (int c = 0; c < input[0].spec.nchannels; ++c) {
+      const std::string& channel = input[0].spec.channelnames[c];
+      const int oc = made.channelindex(channel);
+      ASSERT_GE(oc, 0) << name << " " << channel;
+      EXPECT_TRUE(channel_bytes(got[0], oc) == channel_bytes(input[0], c)) << name << channel;
+    }
+    for (std::size_t k = 1; k < input.size(); ++k) {
+      const OIIO::ImageSpec& have = got[k].spec;
+      EXPECT_EQ(std::vector<int>({have.x, have.y, have.width, have.height, have.tile_height}),
+                std::vector<int>({12, 40, 1000, 600, 80}));
+      EXPECT_EQ(have.channelnames, input[k].spec.channelnames);
+      EXPECT_TRUE(got[k].bytes == input[k].bytes) << name << " part " << k;
+    }
+    // Not a copy of nothing: the light is there.
+    double light = 0;
+    const std::vector<unsigned char> gi = channel_bytes(got[0], made.channelindex("gi.R"));
+    for (std::size_t i = 0; i + 4 <= gi.size(); i += 4) {
+      float v;
+      std::memcpy(&v, gi.data() + i, 4);
+      light += v;
+    }
+    EXPECT_GT(light, 0) << name;
+  }
 }
 
 TEST_F(Cli, PassesSpreadOverPartsWithTheirOwnDataWindowsRun) {

@@ -309,43 +309,51 @@ TEST(Memory, ReadingTwiceFitsLessAndGivesTheSameBits) {
   }
 }
 
-// Passthrough reads each input's channels from its file again when its frame is written, so an
-// input replaced in between by a file of other channels fails that frame alone, with one line
-// naming the file, and leaves neither its output nor a temporary file; the other frames are
-// written. With the window's frames kept and read twice alike.
-TEST(Memory, AnInputChangedBeforeItsFrameIsWrittenFailsThatFrameAlone) {
+// An input is read again after it was lit: to be finished (read twice) and for its passed-through
+// channels when its frame is written. A file replaced in between, by one of other channels
+// (frame 2, replaced once it is finished) or by the same channels written anew (frame 3, replaced
+// once it is lit), fails that frame alone, with one line naming the file, and leaves neither its
+// output nor a temporary file; the other frames are written. With the window's frames kept and
+// read twice alike.
+TEST(Memory, AnInputChangedAfterItWasLitFailsThatFrameAlone) {
   for (const int in_flight : {2, 0}) {
     const std::string dir = fresh_dir("ssgi_memory_changed");
     fs::create_directories(dir + "/out");
     const auto input = [&](int f) { return dir + "/in.000" + std::to_string(f) + ".exr"; };
-    for (int f = 1; f <= 4; ++f)
+    for (int f = 1; f <= 5; ++f)
       fs::copy_file(testdata("static/static.000" + std::to_string(f) + ".exr"), input(f));
     RunOptions o;
     o.input.pattern = dir + "/in.####.exr";
     o.output = dir + "/out/o.####.exr";
     o.frames_in_flight = in_flight;
+    const auto replace = [&](int f, int channels, const char* compression) {
+      OIIO::ImageBuf whole(input(f));
+      OIIO::ImageBuf again =
+          OIIO::ImageBufAlgo::channels(whole, channels > 0 ? channels : whole.spec().nchannels, {});
+      again.specmod().attribute("compression", compression);
+      ASSERT_TRUE(again.write(dir + "/replacement.exr")) << again.geterror();
+      fs::rename(dir + "/replacement.exr", input(f));
+    };
     RunCallbacks callbacks;
     callbacks.on_result = [&](const GBuffer& g, const FrameResult&) {
-      if (g.frame != 2) return;
-      // Frame 2, lit and finished, is rewritten without its last channel before it is written.
-      OIIO::ImageBuf whole(input(2));
-      const int keep = whole.spec().nchannels - 1;
-      OIIO::ImageBuf fewer = OIIO::ImageBufAlgo::channels(whole, keep, {});
-      ASSERT_TRUE(fewer.write(dir + "/replacement.exr")) << fewer.geterror();
-      fs::rename(dir + "/replacement.exr", input(2));
+      if (g.frame == 1) replace(3, 0, "piz");  // lit already, not finished yet
+      if (g.frame == 2) {
+        OIIO::ImageInput::unique_ptr in = OIIO::ImageInput::open(input(2));
+        replace(2, in->spec().nchannels - 1, "zip");
+      }
     };
     const RunReport report = run_sequence(o, callbacks);
     const std::string what = in_flight ? "kept" : "read twice";
-    ASSERT_EQ(report.frames.size(), 4u) << what;
+    ASSERT_EQ(report.frames.size(), 5u) << what;
     for (const FrameReport& f : report.frames) {
-      if (f.frame != 2) {
+      if (f.frame != 2 && f.frame != 3) {
         EXPECT_TRUE(f.ok) << what << " frame " << f.frame << ": " << f.error;
         EXPECT_TRUE(fs::exists(f.output)) << what << " " << f.output;
         continue;
       }
-      EXPECT_FALSE(f.ok) << what;
+      EXPECT_FALSE(f.ok) << what << " frame " << f.frame;
       EXPECT_EQ(f.error_kind, ErrorKind::kIO) << what;
-      EXPECT_EQ(f.error_file, input(2)) << what;
+      EXPECT_EQ(f.error_file, input(f.frame)) << what;
       EXPECT_NE(f.error.find("changed since it was read"), std::string::npos) << f.error;
       EXPECT_EQ(f.error.find('\n'), std::string::npos) << f.error;
       EXPECT_FALSE(fs::exists(f.output)) << what;

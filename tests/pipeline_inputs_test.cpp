@@ -119,7 +119,7 @@ bool same_bits(const Image& a, const Image& b) {
 
 // The composite written over the frame's albedo and beauty has the bits of the one written beside
 // them, on a frame with background, surfaces without albedo and non-finite light; with a beauty
-// with alpha (written over), without alpha, without a beauty, and without emission.
+// (written over), without one, and without emission.
 TEST(Pipeline, CompositeInPlaceGivesTheBitsOfTheCompositeBeside) {
   GiSettings s;
   const Frame f = load("sample/sample.0001.exr", s);
@@ -138,16 +138,10 @@ TEST(Pipeline, CompositeInPlaceGivesTheBitsOfTheCompositeBeside) {
   base.direct.at(1, 4, 3) = 3e38f;
   base.emission.at(2, 4, 3) = 3e38f;
   int cases = 0;
-  for (const int variant : {0, 1, 2, 3}) {
+  for (const int variant : {0, 1, 2}) {
     GBuffer g = base;
-    if (variant == 1) {
-      Image rgb(w, g.height(), 3);
-      for (int c = 0; c < 3; ++c)
-        std::copy_n(g.beauty.plane(c), g.beauty.plane_size(), rgb.plane(c));
-      g.beauty = rgb;
-    }
-    if (variant == 2) g.beauty = Image();
-    if (variant == 3) g.emission = Image();
+    if (variant == 1) g.beauty = Image();
+    if (variant == 2) g.emission = Image();
     const FrameResult beside = detail::composite_frame(g, indirect, coverage);
     const FrameResult over = detail::composite_frame_in_place(&g, indirect, coverage);
     EXPECT_TRUE(same_bits(beside.indirect, over.indirect)) << variant;
@@ -159,10 +153,10 @@ TEST(Pipeline, CompositeInPlaceGivesTheBitsOfTheCompositeBeside) {
     double gi = 0;
     for (float v : over.gi.data()) gi += v;
     EXPECT_GT(gi, 0) << variant;
-    if (variant != 2) EXPECT_EQ(over.composite.at(0, 5, 2), base.beauty.at(0, 5, 2)) << variant;
+    if (variant != 1) EXPECT_EQ(over.composite.at(0, 5, 2), base.beauty.at(0, 5, 2)) << variant;
     ++cases;
   }
-  EXPECT_EQ(cases, 4);
+  EXPECT_EQ(cases, 3);
 }
 
 }  // namespace

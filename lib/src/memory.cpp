@@ -8,9 +8,11 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <numeric>
 #include <sstream>
 #include <vector>
 
+#include "io/oiio_files.h"
 #include "reference/reference.h"
 #include "ssgi/error.h"
 
@@ -178,7 +180,16 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
   const bool read_twice = memory.read_twice && plan.temporal == TemporalMode::kWindow;
   const double read = role_planes(plan.roles);
   const double motion = (plan.roles & role_bit(Role::kMotion)) ? 4 : 0;
-  const std::uint64_t strip = 16 * kMiB;
+  // Whole chunks of the input's, about 16 MB (detail::strip_rows): a file with tall chunks
+  // (DWA's 256 scanlines, tall tiles) takes more.
+  std::uint64_t input_bytes = 0;  // a pixel of every channel of the input, 4 bytes each at most
+  for (const auto& c : seq.channels.channels) input_bytes += 4 * c.size();
+  const int own_width = seq.data_window.width(), own_height = seq.data_window.height();
+  const auto strip_of = [&](std::uint64_t pixel_bytes, int chunk) {
+    const std::uint64_t row = pixel_bytes * static_cast<std::uint64_t>(own_width);
+    return row * static_cast<std::uint64_t>(detail::strip_rows(row, chunk, own_height));
+  };
+  const std::uint64_t strip = strip_of(input_bytes, seq.chunk_rows);
   RoleMask lit_roles = plan.roles;
   if (read_twice) {
     lit_roles &= ~role_bit(Role::kBeauty);
@@ -229,8 +240,12 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
   std::uint64_t multiframe = 0;
   if (plan.multiframe > 0) {
     const std::uint64_t own = tracer + grid * (static_cast<std::uint64_t>(s.slices) * 8 * 16 + 16);
+    // The frames lit and not yet finished: the window's later half and its centre, read twice
+    // or not.
+    const std::uint64_t unfinished =
+        plan.temporal == TemporalMode::kWindow ? s.temporal_radius + 1 : 1;
     multiframe =
-        ring_frames * (planes(12, grid) + grid * (5 + 24)) + (waiting + 1) * own + planes(13, grid);
+        ring_frames * (planes(12, grid) + grid * (5 + 24)) + unfinished * own + planes(13, grid);
   }
   // The denoiser's pyramid and guides at full resolution when the light enters it there; from
   // a coarser trace grid, only the depths whole, the coarser levels (a third of a plane per
@@ -238,50 +253,55 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
   // last two levels' 3 planes each, the last the frame's light): 9 planes. Beside them the
   // coverage (1), and the composite's gi and composite (7) unless they are written over the
   // passes' albedo and beauty (composite_frame_in_place).
+  // Without the denoiser on the full-resolution grid, the light alone (3).
   const std::uint64_t denoise =
-      scale > 1 ? planes(9, pixels) : (plan.denoise ? planes(24, pixels) : 0);
-  const std::uint64_t composite = planes(memory.passes_read_after_composite ? 8 : 1, pixels);
-  // The writer encodes strips of rows of ours and the passed-through channels (16 MB at most),
-  // which it reads from the input's file a strip at a time.
-  std::uint64_t input_bytes = 0;
-  for (const auto& c : seq.channels.channels) input_bytes += 4 * c.size();
-  const std::uint64_t own_pixels =
-      static_cast<std::uint64_t>(seq.data_window.width()) * seq.data_window.height();
-  const auto strip_of = [&](std::uint64_t whole) { return std::min(strip, whole); };
-  const std::uint64_t writer = strip_of(own_pixels * (44 + (write.passthrough ? input_bytes : 0))) +
-                               (write.passthrough ? strip_of(own_pixels * input_bytes) : 0);
+      scale > 1 ? planes(9, pixels) : planes(plan.denoise ? 24 : 3, pixels);
+  const bool over_passes = !memory.passes_read_after_composite && seq.layout.has(Role::kBeauty);
+  const std::uint64_t composite = planes(over_passes ? 1 : 8, pixels);
+  // The writer encodes strips of rows of ours (11 channels, 4 bytes each at most) and the
+  // passed-through channels, which it reads from the input's file a strip at a time; strips of
+  // whole chunks of both files.
+  const int out_chunk = std::lcm(detail::scanlines_per_chunk(write.compression), seq.chunk_rows);
+  const std::uint64_t writer = strip_of(44 + (write.passthrough ? input_bytes : 0), out_chunk) +
+                               (write.passthrough ? strip_of(input_bytes, out_chunk) : 0);
   // A frame's phases, one after the other: lit (read, traced), finished (its passes, the
   // denoiser's upsampling, the composite), written (the four layers, 11 planes, and the strips).
   // A frame being finished holds its passes: in the window without motion (read again, or kept
   // since it was lit), else as read.
   const std::uint64_t finishing_passes =
       planes(plan.temporal == TemporalMode::kWindow ? read - motion : read, pixels);
-  const std::uint64_t lighting = frame + tracing + multiframe;
+  const std::uint64_t lighting = frame + tracing;
   const std::uint64_t finishing = finishing_passes + denoise + composite;
-  const std::uint64_t writing = planes(11, pixels) + writer;
-  // The allocator of ssgi's programs keeps what a phase frees for the next (cli/fast_malloc)
-  // unless the run has a limit or takes the least memory; else the phases' peaks do not add.
-  const std::uint64_t phases = memory.freed_blocks_kept ? lighting + finishing + writing
-                                                        : std::max({lighting, finishing, writing});
+  // With a callback or the preview the passes stay until the frame is written.
+  const std::uint64_t writing =
+      planes(11, pixels) + writer + (memory.passes_read_after_composite ? finishing_passes : 0);
+  // What a phase frees goes back before the next (ssgi's own allocator is told so:
+  // cli/fast_malloc.h), so the phases' peaks do not add up.
+  const std::uint64_t phases = std::max({lighting, finishing, writing});
   // Overlapping, the next frame is read while one is lit and the last written (its layers).
   const int in_flight = std::clamp(memory.frames_in_flight, 1, 3);
-  const std::uint64_t overlap = (in_flight >= 2 ? frame : 0) + (in_flight >= 3 ? writing : 0);
+  // Read twice, the frame read ahead may be a second reading, of the passes without motion.
+  const std::uint64_t ahead = read_twice ? std::max(frame, finishing_passes + strip) : frame;
+  const std::uint64_t overlap = (in_flight >= 2 ? ahead : 0) + (in_flight >= 3 ? writing : 0);
   // The program, its libraries (OIIO's plugins, OCIO) and the allocator's pools, and per worker
-  // its stack and buffers: 149 MiB measured on 1 thread, 153 on 2, 158 on 4 for the sample.
+  // its stack and buffers: 149 MiB measured on 1 thread, 153 on 2, 158 on 4 (`/usr/bin/time -f
+  // %M ssgi run testdata/sample/sample.####.exr -o OUT --threads N`).
   const std::uint64_t program = 140 * kMiB + static_cast<std::uint64_t>(threads) * 4 * kMiB;
 
   MemoryEstimate e;
-  e.bytes = program + ring + phases + overlap;
-  e.parts = "frames " + memory_size_text(ring) + " (" + std::to_string(ring_frames) +
-            " in the ring, " +
-            (read_twice ? std::string("read twice") : std::to_string(waiting) + " waiting") +
-            "), lit " + memory_size_text(lighting) + " (read " + memory_size_text(frame) +
-            ", tracing " + memory_size_text(tracing) +
-            (multiframe ? ", multiframe " + memory_size_text(multiframe) : std::string()) +
-            "), finished " + memory_size_text(finishing) + ", written " +
-            memory_size_text(writing) + (memory.freed_blocks_kept ? ", one after another" : "") +
-            ", " + std::to_string(in_flight) + " frame" + (in_flight > 1 ? "s" : "") +
-            " in flight " + memory_size_text(overlap) + ", program " + memory_size_text(program);
+  // What multiframe keeps of the ring's frames stays through every phase.
+  e.bytes = program + ring + multiframe + phases + overlap;
+  e.parts =
+      "frames " + memory_size_text(ring) + " (" + std::to_string(ring_frames) + " in the ring, " +
+      (read_twice ? std::string("read twice") : std::to_string(waiting) + " waiting") + ")" +
+      (multiframe ? ", multiframe " + memory_size_text(multiframe) : std::string()) + ", lit " +
+      memory_size_text(lighting) + " (read " + memory_size_text(frame) + ", tracing " +
+      memory_size_text(tracing) + "), finished " + memory_size_text(finishing) + ", written " +
+      memory_size_text(writing) + ", " +
+      (in_flight > 1 ? std::to_string(in_flight - 1) + " more frame" + (in_flight > 2 ? "s" : "") +
+                           " in flight " + memory_size_text(overlap) + ", "
+                     : std::string()) +
+      "program " + memory_size_text(program);
   return e;
 }
 
@@ -295,9 +315,7 @@ PipelineMemory pipeline_memory_within(const MemoryLimit& limit, const SequenceIn
   memory.frames_in_flight = asked ? std::clamp(frames_in_flight, 1, 3) : 2;
   const bool window = plan.temporal == TemporalMode::kWindow;
   if (limit.bytes == 0) {
-    if (asked) {
-      memory.freed_blocks_kept = true;
-    } else {
+    if (!asked) {
       memory.frames_in_flight = 1;
       memory.read_twice = window;
     }

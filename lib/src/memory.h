@@ -43,11 +43,11 @@ struct MemoryEstimate {
 };
 
 // An upper bound on the peak of a run of `sequence` with `plan` and `settings` on `threads`
-// workers (the frames the temporal window keeps, the planes each holds, the tracer's hits and
-// scene, the denoiser, the composite and the writer, with or without passthrough, and the
-// frames in flight besides the one lit: memory.frames_in_flight), from the
-// first frame's header alone. Measured against the peak resident size of real runs
-// (tests/bench/memory.sh): a bound within about 2x of it for frames of a megapixel and up.
+// workers (the frames the temporal window keeps, a frame's planes while it is lit, finished and
+// written, the tracer's hits and scene, the denoiser, the writer's strips, and the frames in
+// flight besides the one lit: memory.frames_in_flight), from the first frame's header alone.
+// Measured against the peak resident size of rendered 1080p and 4K shots
+// (tests/bench/rendered.sh): 13 to 15% above it.
 MemoryEstimate estimate_run_memory(const SequenceInfo& sequence, const Plan& plan,
                                    const GiSettings& settings, const WriteOptions& write,
                                    int threads, const PipelineMemory& memory);

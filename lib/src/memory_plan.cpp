@@ -22,7 +22,11 @@ MemoryPlan plan_run_memory(const SequenceInfo& seq, const GiSettings& gi, const 
 }
 
 std::string MemoryPlan::reason() const {
-  if (limit.bytes) return "to fit the limit";
+  if (limit.bytes) {
+    const int most = frames_in_flight_asked > 0 ? frames_in_flight_asked : 2;
+    return memory.frames_in_flight < most || memory.read_twice ? "to fit the limit"
+                                                               : "within the limit";
+  }
   if (frames_in_flight_asked > 0) return "as asked";
   return "the least memory, without a limit; a --max-memory above it lets the run overlap "
          "frames and keep the window's, to go faster";

@@ -18,8 +18,9 @@ struct MemoryPlan {
   PipelineMemory memory;           // what the run uses: frames in flight, read twice, hits kept
   MemoryEstimate estimate;         // the peak with `memory`
   bool over_limit() const { return limit.bytes != 0 && estimate.bytes > limit.bytes; }
-  // Why `memory` is what it is: "to fit the limit", "as asked", or the least memory without
-  // a limit (pipeline_memory_within).
+  // Why `memory` is what it is: "to fit the limit" (fewer frames in flight or read twice),
+  // "within the limit", "as asked", or the least memory without a limit
+  // (pipeline_memory_within).
   std::string reason() const;
 };
 

@@ -414,10 +414,11 @@ class Processor {
       return std::nullopt;
     }
     Lit lit{std::move(traced), nullptr, nullptr};
+    // Kept until the frame is written: its input's headers (the file it was lit from), and its
+    // passes unless it is read again to be finished. Motion only served the trace grid, which
+    // the ring holds.
+    if (still_to_write(s.read, s.output)) lit.input = frame.input;
     if (still_to_write(s.read, s.output) && !read_twice_) {
-      // Kept until the frame is written: its passes and its input's headers. Motion only served
-      // the trace grid, which the ring holds.
-      lit.input = frame.input;
       frame.g.motion_prev = Image();
       frame.g.motion_next = Image();
       lit.g = std::make_shared<GBuffer>(std::move(frame.g));
@@ -474,6 +475,8 @@ class Processor {
         if (!own)
           throw Error(ErrorKind::kInternal, seq_.pattern.path_for(n),
                       "frame " + std::to_string(n) + " was not read again");
+        // Finished from the file it was lit from, or not at all.
+        if (lit.input) check_unchanged(*lit.input, *own->input);
         lit.g = std::make_shared<GBuffer>(std::move(own->g));
         lit.input = std::move(own->input);
       }

@@ -1,6 +1,7 @@
-// The frame loop of a run (internal): each input decoded once, lit, filtered over the temporal
-// ring, composited and written, as a pipeline of frames in which reading the next input and
-// writing the last output overlap with computing the current one.
+// The frame loop of a run (internal): each input decoded and lit (and, read twice, decoded again
+// to be finished), filtered over the temporal ring, composited and written, its passed-through
+// channels read from its file again, as a pipeline of frames in which reading the next input and
+// writing the last output may overlap with computing the current one.
 #pragma once
 
 #include <functional>

@@ -49,6 +49,9 @@ struct SequenceInfo {
   FileChannels channels;  // of the first frame
   Layout layout;          // resolved against the first frame
   double pixel_aspect = 1.0;
+  // The first frame's largest chunk in rows: what the file decodes at once (a tile's height, or
+  // its compression's block of scanlines), which the reader and the writer's strips hold whole.
+  int chunk_rows = 1;
   bool normals_from_depth = false;  // --normals: the reader derives normals from depth
   // --context: the context's frames as probed from their first (its frames those of this
   // sequence); the G-buffers read cover its data window. Null without --context.

@@ -45,10 +45,6 @@ struct PipelineMemory {
   // Whether a frame's passes are read after its composite (a callback, the preview): the
   // composite is then written beside them rather than over them.
   bool passes_read_after_composite = false;
-  // Whether the program's allocator keeps the blocks a frame's phase frees for the next (as
-  // ssgi's own programs do, for speed, when a run has no limit and asks for frames in flight):
-  // the estimate then adds the phases' peaks.
-  bool freed_blocks_kept = false;
 };
 
 // A memory limit and what set it; bytes 0: none.

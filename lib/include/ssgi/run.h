@@ -29,16 +29,18 @@ struct RunOptions {
   bool skip_existing = false;
   // --no-clobber: refuse the run, before any frame is computed, when it would overwrite a file.
   bool no_clobber = false;
-  // --max-memory, else the scheduler's (scheduler_memory_limit): a run whose estimated peak
-  // (estimate_run_memory) is over it is refused before anything is computed or written.
+  // --max-memory, else the scheduler's (scheduler_memory_limit): the run takes the fastest plan
+  // whose estimated peak (estimate_run_memory) fits it, and is refused before anything is
+  // computed or written when none does; none: the least memory (pipeline_memory_within).
   MemoryLimit memory_limit;
-  // --frames-in-flight: frames read, lit and written at once (1 to 3; 0: PipelineMemory's
-  // default), fewer when the memory limit needs it.
+  // --frames-in-flight: frames read, lit and written at once (1 to 3, the window's frames
+  // kept; 0: as the limit fits, pipeline_memory_within), fewer when the memory limit needs it.
   int frames_in_flight = 0;
 };
 
-// Runs the pipeline over the sequence: each input decoded once, and while one frame is lit the
-// next is read and the last written (as many frames in flight as the memory limit allows).
+// Runs the pipeline over the sequence: each input decoded to be lit, and while one frame is lit
+// the next may be read and the last written (the plan pipeline_memory_within makes for the
+// memory limit); its passed-through channels are read from the file again when it is written.
 // Errors that concern the whole run (bad options, a
 // pattern matching nothing, an output that would overwrite an input, or with no_clobber any
 // existing output it would write again) are thrown as ssgi::Error before any frame is written;

@@ -579,7 +579,11 @@ SequenceInfo open_sequence(const InputOptions& options, bool check_header_camera
     throw_input(first, "data window " + corners(dw) + " lies wholly outside the display window " +
                            corners(fw) + ": none of its pixels is in the picture");
   }
-  seq.pixel_aspect = spec.get_float_attribute("PixelAspectRatio", 1.0f);
+  for (int part = 0; in->seek_subimage(part, 0); ++part)
+    seq.chunk_rows = std::max(seq.chunk_rows, detail::rows_per_chunk(in->spec()));
+  in->geterror();  // seek_subimage past the last part leaves a message
+  in->seek_subimage(0, 0);
+  seq.pixel_aspect = in->spec().get_float_attribute("PixelAspectRatio", 1.0f);
   if (!(seq.pixel_aspect > 0) || !std::isfinite(seq.pixel_aspect)) seq.pixel_aspect = 1.0;
   seq.layout = resolve_layout(seq.channels, options.layout, options.channel_overrides, first);
   if (!options.depth_kind.empty() &&

@@ -279,7 +279,7 @@ void detail::write_frame(const std::string& path, const GBuffer& frame,
   std::unique_ptr<OIIO::ImageInput> in;
   if (passthrough) {
     in = detail::open_image(input.path);
-    detail::check_unchanged(*in, input);
+    detail::check_unchanged(input, detail::decode_input(*in, input.path));
   }
   std::size_t clamped = 0;
   std::vector<std::byte> host_rows;

@@ -45,11 +45,7 @@ void refuse_deep(OIIO::ImageInput& in, int subimage, const std::string& path) {
   if (in.spec().deep) throw_deep(path, subimage);
 }
 
-namespace {
-
-// Scanlines per chunk of a scanline file's compression (OpenEXR's table); unknown: 32.
-int lines_per_chunk(const OIIO::ImageSpec& spec) {
-  const std::string compression = spec.get_string_attribute("compression", "none");
+int scanlines_per_chunk(const std::string& compression) {
   const std::string name = compression.substr(0, compression.find(':'));
   if (name == "none" || name == "rle" || name == "zips") return 1;
   if (name == "zip" || name == "pxr24") return 16;
@@ -57,8 +53,18 @@ int lines_per_chunk(const OIIO::ImageSpec& spec) {
   return 32;  // piz, b44, b44a, dwaa
 }
 
-// Rows read at once: whole chunks, about this many bytes of float pixels.
-constexpr std::size_t kStripBytes = std::size_t{16} << 20;
+int strip_rows(std::size_t row_bytes, int chunk, int height) {
+  const int rows =
+      chunk *
+      std::max<int>(1, static_cast<int>(kStripBytes / std::max<std::size_t>(1, row_bytes * chunk)));
+  return std::min(rows, height);
+}
+
+namespace {
+
+int lines_per_chunk(const OIIO::ImageSpec& spec) {
+  return scanlines_per_chunk(spec.get_string_attribute("compression", "none"));
+}
 
 }  // namespace
 
@@ -81,9 +87,9 @@ void read_float_channels(OIIO::ImageInput& in, int subimage,
   const int x0 = std::max(spec.x, window.x0), x1 = std::min(spec.x + spec.width, window.x1);
   const int y0 = std::max(spec.y, window.y0), y1 = std::min(spec.y + spec.height, window.y1);
   if (x1 <= x0 || y1 <= y0) return;
-  const int chunk = spec.tile_width > 0 ? spec.tile_height : lines_per_chunk(spec);
+  const int chunk = rows_per_chunk(spec);
   const std::size_t row_bytes = static_cast<std::size_t>(spec.width) * n * sizeof(float);
-  const int rows = chunk * std::max<int>(1, static_cast<int>(kStripBytes / (row_bytes * chunk)));
+  const int rows = strip_rows(row_bytes, chunk, spec.height);
   std::vector<float> strip(static_cast<std::size_t>(rows) * spec.width * n);
   // Strips start on chunk boundaries, which count from the part's top.
   for (int top = spec.y + (y0 - spec.y) / chunk * chunk; top < y1; top += rows) {
@@ -148,6 +154,9 @@ int rows_per_chunk(const OIIO::ImageSpec& spec) {
 DecodedInput decode_input(OIIO::ImageInput& in, const std::string& path) {
   DecodedInput input;
   input.path = path;
+  std::error_code ec;
+  input.file_bytes = fs::file_size(path, ec);
+  input.modified = fs::last_write_time(path, ec);
   for (int s = 0; in.seek_subimage(s, 0); ++s) {
     DecodedInput::Part part;
     part.spec = in.spec();
@@ -158,29 +167,26 @@ DecodedInput decode_input(OIIO::ImageInput& in, const std::string& path) {
   return input;
 }
 
-void check_unchanged(OIIO::ImageInput& in, const DecodedInput& input) {
+void check_unchanged(const DecodedInput& input, const DecodedInput& now) {
   const auto changed = [&](const std::string& what) {
-    throw_io(input.path, "changed since it was read (" + what +
-                             "): its channels cannot be passed through as they were");
+    throw_io(input.path,
+             "changed since it was read (" + what + "): its pixels cannot make one frame");
   };
-  int count = 0;
-  for (; in.seek_subimage(count, 0); ++count) {
-    if (count >= static_cast<int>(input.parts.size())) break;
-    const OIIO::ImageSpec& now = in.spec();
-    const OIIO::ImageSpec& then = input.parts[count].spec;
-    const std::string part = "part " + std::to_string(count);
-    if (now.x != then.x || now.y != then.y || now.width != then.width ||
-        now.height != then.height || now.deep != then.deep)
+  if (now.file_bytes != input.file_bytes || now.modified != input.modified)
+    changed("its size or modification time");
+  if (now.parts.size() != input.parts.size())
+    changed(std::to_string(now.parts.size()) + " parts, not " + std::to_string(input.parts.size()));
+  for (std::size_t i = 0; i < now.parts.size(); ++i) {
+    const OIIO::ImageSpec& a = input.parts[i].spec;
+    const OIIO::ImageSpec& b = now.parts[i].spec;
+    const std::string part = "part " + std::to_string(i);
+    if (a.x != b.x || a.y != b.y || a.width != b.width || a.height != b.height || a.deep != b.deep)
       changed(part + "'s data window");
-    if (now.tile_width != then.tile_width || now.tile_height != then.tile_height)
-      changed(part + "'s tiles");
-    if (now.channelnames != then.channelnames) changed(part + "'s channels");
-    for (int c = 0; c < now.nchannels; ++c)
-      if (now.channelformat(c) != then.channelformat(c)) changed(part + "'s channel formats");
+    if (a.tile_width != b.tile_width || a.tile_height != b.tile_height) changed(part + "'s tiles");
+    if (a.channelnames != b.channelnames) changed(part + "'s channels");
+    for (int c = 0; c < b.nchannels; ++c)
+      if (a.channelformat(c) != b.channelformat(c)) changed(part + "'s channel formats");
   }
-  in.geterror();
-  if (count != static_cast<int>(input.parts.size()))
-    changed(std::to_string(count) + " parts, not " + std::to_string(input.parts.size()));
 }
 
 AtomicImageWriter::AtomicImageWriter(const std::string& path, std::vector<OIIO::ImageSpec> parts,
@@ -226,10 +232,9 @@ void AtomicImageWriter::write_part_in_strips(
   const OIIO::ImageSpec& spec = parts_[written_];
   if (written_ > 0 && !out_->open(tmp_, spec, OIIO::ImageOutput::AppendSubimage))
     fail(one_line(out_->geterror()));
-  const int chunk = std::lcm(rows_per_chunk(spec), row_multiple);
   const std::size_t row_bytes = spec.scanline_bytes(/*native=*/true);
-  const int rows = chunk * std::max<int>(1, static_cast<int>(kStripBytes / (row_bytes * chunk)));
-  std::vector<std::byte> strip(row_bytes * std::min(rows, spec.height));
+  const int rows = strip_rows(row_bytes, std::lcm(rows_per_chunk(spec), row_multiple), spec.height);
+  std::vector<std::byte> strip(row_bytes * rows);
   for (int y = 0; y < spec.height; y += rows) {
     const int n = std::min(rows, spec.height - y);
     fill(y, n, strip.data());

@@ -6,6 +6,7 @@
 #include <OpenImageIO/imageio.h>
 
 #include <cstddef>
+#include <filesystem>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -66,15 +67,19 @@ struct DecodedInput {
   };
   std::string path;
   std::vector<Part> parts;
+  // The file as it was when it was opened: a file written again since (a re-render) differs.
+  std::uintmax_t file_bytes = 0;
+  std::filesystem::file_time_type modified{};
 };
 
 // The headers of every part of the open file `in` (at `path`). Throws Error(kIO) naming `path`.
 DecodedInput decode_input(OIIO::ImageInput& in, const std::string& path);
 
-// Throws Error(kIO) naming input.path when the open file `in` (that file, opened again) no longer
-// has the parts `input` was read with: their number, windows, tiling, channels or formats. Its
-// pixels could then not be passed through as they were.
-void check_unchanged(OIIO::ImageInput& in, const DecodedInput& input);
+// Throws Error(kIO) naming input.path when the file at that path, `now` (as decode_input saw it
+// later), is not the file `input` was read from: another size or modification time, other
+// parts, windows, tiling, channels or formats. Pixels read from the two could not be put together
+// in one frame.
+void check_unchanged(const DecodedInput& input, const DecodedInput& now);
 
 // Reads rows [top, bottom) of subimage `subimage`'s data window (counted from its first row,
 // top mip level) in the file's own per-channel formats, interleaved (spec.pixel_bytes(true) bytes
@@ -86,6 +91,15 @@ void read_native_rows(OIIO::ImageInput& in, int subimage, int top, int bottom, s
 // The rows a strip of a part is made of, so that it starts and ends on the part's chunks: a
 // tile's height, or the scanlines its compression packs into one block.
 int rows_per_chunk(const OIIO::ImageSpec& spec);
+
+// Scanlines per chunk of a scanline file compressed with `compression` ("zip", "dwaa:45", ...:
+// OpenEXR's table); unknown: 32.
+int scanlines_per_chunk(const std::string& compression);
+
+// Rows the reader and the writer take at once: whole chunks of `chunk` rows, about this many
+// bytes (at least one chunk, at most the part's `height`), of rows of `row_bytes` each.
+constexpr std::size_t kStripBytes = std::size_t{16} << 20;
+int strip_rows(std::size_t row_bytes, int chunk, int height);
 
 // A file written through a hidden temporary file in the same directory (keeping the extension,
 // which tells OIIO the format) and renamed into place by commit(). Destroyed before commit(), it
