@@ -2,7 +2,8 @@
 # The memory estimate (ssgi -v: "memory: estimated peak ...") against the peak resident size
 # measured by /usr/bin/time (%M), for the sample room resampled to each WIDTH (27 channels,
 # point sampled) over 5 frames, so that the temporal window holds what it holds in a shot:
-# the slice tracer with and without passthrough and its window, the march, and the reference
+# the slice tracer with and without passthrough and its window (the least memory, and two frames
+# in flight with the window's frames kept), the march, and the reference
 # keeping its hits or not. Prints one row per run: the estimate should be above the peak, and
 # not by much. Usage:
 #   tests/bench/memory.sh [BUILD_DIR] [THREADS] [WIDTH...]     (default: build 2 960 1920)
@@ -36,6 +37,7 @@ for w in "${widths[@]}"; do
     rm -rf "$work/out"
   done <<FLAGS
 run
+run --frames-in-flight 2
 run --no-passthrough
 run --temporal none --no-passthrough
 run --tracer march --rays 8 --frames 1
