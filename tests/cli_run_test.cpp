@@ -494,6 +494,20 @@ std::vector<unsigned char> channel_bytes(const NativePart& part, int c) {
   return out;
 }
 
+// A part of `channels` float channels over `width` x `height` pixels at (x, y) of `frame`'s
+// display window.
+OIIO::ImageSpec part_of(const OIIO::ImageSpec& frame, int width, int height, int channels, int x,
+                        int y) {
+  OIIO::ImageSpec spec(width, height, channels, OIIO::TypeDesc::FLOAT);
+  spec.x = x;
+  spec.y = y;
+  spec.full_x = frame.full_x;
+  spec.full_y = frame.full_y;
+  spec.full_width = frame.full_width;
+  spec.full_height = frame.full_height;
+  return spec;
+}
+
 TEST_F(Cli, MultiPartInputComesBackInItsOwnTypesPartsAndAttributes) {
   // Part 0: the sample frame (float) plus a uint32 object ID above 2^24 (float would change
   // about half of them) and Cryptomatte's attributes; part 1: a Cryptomatte rank layer over a
@@ -524,13 +538,7 @@ TEST_F(Cli, MultiPartInputComesBackInItsOwnTypesPartsAndAttributes) {
   }
 
   NativePart& rank = parts[1];
-  rank.spec = OIIO::ImageSpec(40, 20, 4, OIIO::TypeDesc::FLOAT);
-  rank.spec.x = 10;
-  rank.spec.y = 5;
-  rank.spec.full_x = base.full_x;
-  rank.spec.full_y = base.full_y;
-  rank.spec.full_width = base.full_width;
-  rank.spec.full_height = base.full_height;
+  rank.spec = part_of(base, 40, 20, 4, 10, 5);
   rank.spec.channelnames = {"CryptoObject00.R", "CryptoObject00.G", "CryptoObject00.B",
                             "CryptoObject00.A"};
   rank.spec.attribute("oiio:subimagename", "crypto");
@@ -624,11 +632,7 @@ TEST_F(Cli, PassthroughReadStripByStripKeepsEveryByteOfTilesAndTallChunks) {
   tiled[0].spec.attribute("oiio:subimagename", "host");
   tiled[0].spec.attribute("compression", "zip");
   NativePart& other = tiled[1];
-  other.spec = OIIO::ImageSpec(1000, 600, 24, OIIO::TypeDesc::FLOAT);
-  other.spec.x = 12;
-  other.spec.y = 40;
-  other.spec.full_width = big.full_width;
-  other.spec.full_height = big.full_height;
+  other.spec = part_of(big, 1000, 600, 24, 12, 40);
   other.spec.tile_width = 40;
   other.spec.tile_height = 80;
   other.spec.channelnames.clear();
