@@ -176,8 +176,8 @@ void print_memory(const Report& r) {
               in_flight == 1 ? "" : "s");
   std::printf(" (%s)\n", m.reason().c_str());
   std::printf("  decoded        %s\n", m.memory.read_twice
-                                         ? "twice a frame (lit, then finished and written)"
-                                         : "once a frame");
+                                           ? "twice a frame (lit, then finished and written)"
+                                           : "once a frame");
   if (m.over_limit())
     std::printf("  refused        over the limit: ssgi run would refuse the run (exit 3)\n");
 }
