@@ -8,6 +8,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <cstddef>
 #include <utility>
 
 namespace ssgi::detail {
@@ -18,6 +19,22 @@ template <typename Body>
 void parallel_for_rows(int rows, const Body& body) {
   tbb::parallel_for(tbb::blocked_range<int>(0, rows), [&](const tbb::blocked_range<int>& r) {
     for (int y = r.begin(); y < r.end(); ++y) body(y);
+  });
+}
+
+// Sets the `count` values from `first` on to `value`, in parallel blocks: filling (and first
+// touching the pages of) a frame-sized buffer on one thread is a serial part of the frame.
+template <typename T>
+void parallel_fill(T* first, std::size_t count, const T& value) {
+  constexpr std::size_t kBlockBytes = std::size_t{1} << 17;
+  const std::size_t block = std::max<std::size_t>(1, kBlockBytes / sizeof(T));
+  if (count <= 2 * block) {
+    std::fill(first, first + count, value);
+    return;
+  }
+  parallel_for_rows(static_cast<int>((count + block - 1) / block), [&](int b) {
+    const std::size_t begin = static_cast<std::size_t>(b) * block;
+    std::fill(first + begin, first + std::min(count, begin + block), value);
   });
 }
 

@@ -3,9 +3,41 @@
 
 #include <cassert>
 #include <cstddef>
+#include <memory>
+#include <new>
+#include <utility>
 #include <vector>
 
 namespace ssgi {
+
+namespace detail {
+
+// std::allocator, but a new element is default-initialised (a float is left as it is) rather
+// than zeroed: for buffers their owner fills right after, in parallel (Image's planes).
+template <typename T>
+struct UninitializedAllocator : std::allocator<T> {
+  template <typename U>
+  struct rebind {
+    using other = UninitializedAllocator<U>;
+  };
+  UninitializedAllocator() = default;
+  template <typename U>
+  UninitializedAllocator(const UninitializedAllocator<U>&) noexcept {}
+  template <typename U>
+  void construct(U* p) noexcept(noexcept(::new (static_cast<void*>(p)) U)) {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <typename U, typename... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+
+// A vector whose resize leaves new elements uninitialised.
+template <typename T>
+using UninitializedVector = std::vector<T, UninitializedAllocator<T>>;
+
+}  // namespace detail
 
 // A half-open pixel rectangle [x0, x1) x [y0, y1) in display-window coordinates
 // (OpenEXR's windows are inclusive; the reader converts).
@@ -29,12 +61,13 @@ struct Box2i {
 // An image with zero channels is "absent" (a pass the input does not provide).
 class Image {
  public:
+  // The planes, one after the other.
+  using Planes = detail::UninitializedVector<float>;
+
   Image() = default;
-  Image(int width, int height, int channels, float fill = 0.0f)
-      : width_(width),
-        height_(height),
-        channels_(channels),
-        data_(static_cast<std::size_t>(width) * height * channels, fill) {}
+  // Every value `fill`, written in parallel: a frame's planes are tens of megabytes, and one
+  // thread writing them (the first touch of their pages) was a serial part of every frame.
+  Image(int width, int height, int channels, float fill = 0.0f);
 
   int width() const { return width_; }
   int height() const { return height_; }
@@ -53,13 +86,13 @@ class Image {
   float& at(int c, int x, int y) { return plane(c)[static_cast<std::size_t>(y) * width_ + x]; }
   float at(int c, int x, int y) const { return plane(c)[static_cast<std::size_t>(y) * width_ + x]; }
 
-  std::vector<float>& data() { return data_; }
-  const std::vector<float>& data() const { return data_; }
+  Planes& data() { return data_; }
+  const Planes& data() const { return data_; }
   std::size_t bytes() const { return data_.size() * sizeof(float); }
 
  private:
   int width_ = 0, height_ = 0, channels_ = 0;
-  std::vector<float> data_;
+  Planes data_;
 };
 
 }  // namespace ssgi
