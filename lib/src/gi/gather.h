@@ -24,14 +24,18 @@ struct HitRow {
   float uniform_weight = 0;
 };
 
-// Weighted hits of every trace sample.
+// Weighted hits of every trace sample. (Resizing the vectors leaves the new entries for the
+// tracer to write, in parallel.)
 struct WeightedHits {
-  std::vector<std::uint32_t> begin;  // per trace sample, first entry; one more at the end
-  std::vector<std::int32_t> pixel;   // trace sample whose light it brings, kSeenFromBehind marked
-  std::vector<float> weight;         // its share of the cosine-weighted hemisphere
-  Image miss;                        // 1 channel: the share that met nothing
-  Image env;                         // 3 channels: environment light of those directions
-  Image cube;                        // kCubeFaces channels: their shares of the miss model's cube
+  // Per trace sample, its first entry; one more at the end.
+  UninitializedVector<std::uint32_t> begin;
+  // Per entry, the trace sample whose light it brings (kSeenFromBehind marked), and its share of
+  // the cosine-weighted hemisphere.
+  UninitializedVector<std::int32_t> pixel;
+  UninitializedVector<float> weight;
+  Image miss;  // 1 channel: the share that met nothing
+  Image env;   // 3 channels: environment light of those directions
+  Image cube;  // kCubeFaces channels: their shares of the miss model's cube
   std::size_t entries() const { return pixel.size(); }
   // Row `by`'s hits, of a grid `width` samples across.
   HitRow row(int by, int width) const {

@@ -40,9 +40,10 @@ struct MissedRay {
 using PixelMisses = std::vector<MissedRay>;
 
 // A frame's missed rays, per trace sample (the slice tracer records them, slices.h).
+// (Resizing begin and rays leaves the new entries for the tracer to write, in parallel.)
 struct MissedRays {
-  std::vector<std::uint32_t> begin;  // per trace sample, its first ray; one more at the end
-  std::vector<MissedRay> rays;
+  UninitializedVector<std::uint32_t> begin;  // per trace sample, its first ray; one more at the end
+  UninitializedVector<MissedRay> rays;
   std::vector<Imath::V3f> origin;  // per trace sample, where its rays start (camera space)
 };
 
