@@ -206,11 +206,15 @@ Image gather_bounces(const TraceGrid& grid, const HitSource& hits, int bounces,
   // Each bounce's light per trace sample, packed RGB_ so that a hit is one 16-byte load: at 2 s
   // the light of its front (what it reflects plus albedo x its indirect light), at 2 s + 1 that
   // of its unseen back (albedo x indirect only), which hits from behind bring (surface_model.h).
-  const std::size_t n = grid.origin.size();
-  std::vector<std::array<float, 4>> light(2 * n);
-  for (std::size_t s = 0; s < n; ++s)
-    light[2 * s] = {grid.reflected.plane(0)[s], grid.reflected.plane(1)[s],
-                    grid.reflected.plane(2)[s], 0.0f};
+  UninitializedVector<std::array<float, 4>> light(2 * grid.origin.size());
+  parallel_for_rows(grid.height, [&](int by) {
+    for (int bx = 0; bx < grid.width; ++bx) {
+      const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
+      light[2 * s] = {grid.reflected.plane(0)[s], grid.reflected.plane(1)[s],
+                      grid.reflected.plane(2)[s], 0.0f};
+      light[2 * s + 1] = {0.0f, 0.0f, 0.0f, 0.0f};
+    }
+  });
   auto lookup = [&](std::int32_t hit) {
     const std::array<float, 4>& l =
         light[2 * static_cast<std::size_t>(hit_pixel(hit)) + (hit >= kSeenFromBehind ? 1 : 0)];
