@@ -1,5 +1,6 @@
 #include "gi/misses.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <vector>
@@ -104,32 +105,55 @@ MissModel::MissModel(const GBuffer& g, MissMode mode, const Environment& env)
   const int stride = std::max(1, static_cast<int>(std::sqrt(static_cast<double>(w) * h) / 256));
   // The display window's columns in bands, for the most open side.
   constexpr int kBands = 8;
+  // Each lattice point's terms, worked out in parallel; the sums below take them in the
+  // lattice's order, so that they are the same bits for any thread count.
+  struct Point {
+    int bin, band;
+    bool surface;
+    double border;
+    int face[3];
+    double facing[3];
+  };
+  const int columns = (w - stride / 2 + stride - 1) / stride;
+  const int rows = (h - stride / 2 + stride - 1) / stride;
+  std::vector<Point> lattice(static_cast<std::size_t>(columns) * rows);
+  parallel_for_rows(rows, [&](int j) {
+    const int y = stride / 2 + j * stride;
+    for (int i = 0; i < columns; ++i) {
+      const int x = stride / 2 + i * stride;
+      Point& pt = lattice[static_cast<std::size_t>(j) * columns + i];
+      const Imath::V3d v = cam.view_dir(offset_x_ + x + 0.5, offset_y_ + y + 0.5);
+      const float e = static_cast<float>(v.x * up_.x + v.y * up_.y + v.z * up_.z);
+      pt.bin =
+          std::clamp(static_cast<int>((e + 1.0f) * 0.5f * kElevationBins), 0, kElevationBins - 1);
+      pt.band =
+          std::clamp(static_cast<int>((offset_x_ + x + 0.5) / display_w_ * kBands), 0, kBands - 1);
+      pt.surface = g.is_surface(x, y);
+      if (!pt.surface) continue;
+      const double b = border_weight(offset_x_ + x + 0.5, offset_y_ + y + 0.5);
+      const float n[3] = {g.normal.at(0, x, y), g.normal.at(1, x, y), g.normal.at(2, x, y)};
+      for (int a = 0; a < 3; ++a) {
+        const float along = n[0] * axis_[a].x + n[1] * axis_[a].y + n[2] * axis_[a].z;
+        pt.face[a] = 2 * a + (along <= 0 ? 0 : 1);
+        pt.facing[a] = b * along * along;
+      }
+      pt.border = b;
+    }
+  });
   std::array<std::array<double, kElevationBins>, kBands> band_sky{}, band_count{};
   std::array<double, kElevationBins> sky{}, count{};
   double facing[kCubeFaces] = {}, border_total = 0;
-  for (int y = stride / 2; y < h; y += stride)
-    for (int x = stride / 2; x < w; x += stride) {
-      const Imath::V3d v = cam.view_dir(offset_x_ + x + 0.5, offset_y_ + y + 0.5);
-      const float e = static_cast<float>(v.x * up_.x + v.y * up_.y + v.z * up_.z);
-      const int k =
-          std::clamp(static_cast<int>((e + 1.0f) * 0.5f * kElevationBins), 0, kElevationBins - 1);
-      count[k] += 1;
-      const int band =
-          std::clamp(static_cast<int>((offset_x_ + x + 0.5) / display_w_ * kBands), 0, kBands - 1);
-      band_count[band][k] += 1;
-      if (!g.is_surface(x, y)) {
-        sky[k] += 1;
-        band_sky[band][k] += 1;
-        continue;
-      }
-      const double b = border_weight(offset_x_ + x + 0.5, offset_y_ + y + 0.5);
-      const float n[3] = {g.normal.at(0, x, y), g.normal.at(1, x, y), g.normal.at(2, x, y)};
-      for (int i = 0; i < 3; ++i) {
-        const float a = n[0] * axis_[i].x + n[1] * axis_[i].y + n[2] * axis_[i].z;
-        facing[2 * i + (a <= 0 ? 0 : 1)] += b * a * a;
-      }
-      border_total += b;
+  for (const Point& pt : lattice) {
+    count[pt.bin] += 1;
+    band_count[pt.band][pt.bin] += 1;
+    if (!pt.surface) {
+      sky[pt.bin] += 1;
+      band_sky[pt.band][pt.bin] += 1;
+      continue;
     }
+    for (int a = 0; a < 3; ++a) facing[pt.face[a]] += pt.facing[a];
+    border_total += pt.border;
+  }
   std::array<double, kElevationBins> share{};
   for (int k = 0; k < kElevationBins; ++k) {
     seen_[k] = static_cast<int>(count[k]);
