@@ -11,6 +11,8 @@
 #include <cstddef>
 #include <limits>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "parallel.h"
 #include "ssgi/error.h"
@@ -555,15 +557,19 @@ std::vector<Image> level_window_misses(const std::vector<const TracedLight*>& wi
     return !t.miss_shares.empty() && t.reflected.channels() == 3;
   };
   std::vector<char> alike(n * n, 0);
+  std::vector<std::pair<std::size_t, std::size_t>> pairs;
   for (std::size_t i = 0; i < n; ++i) {
     alike[i * n + i] = 1;
-    for (std::size_t j = i + 1; j < n; ++j) {
-      if (!levels(*window[i]) || !levels(*window[j])) continue;
-      const double ratio = shared_light_ratio(window[i]->grid, window[i]->reflected,
-                                              window[j]->grid, window[j]->reflected);
-      alike[i * n + j] = alike[j * n + i] = ratio <= kSameLight && ratio * kSameLight >= 1.0;
-    }
+    for (std::size_t j = i + 1; j < n; ++j)
+      if (levels(*window[i]) && levels(*window[j])) pairs.emplace_back(i, j);
   }
+  // Each pair on its own (a window of 5 frames has 10).
+  parallel_for_rows(static_cast<int>(pairs.size()), [&](int k) {
+    const auto [i, j] = pairs[k];
+    const double ratio = shared_light_ratio(window[i]->grid, window[i]->reflected, window[j]->grid,
+                                            window[j]->reflected);
+    alike[i * n + j] = alike[j * n + i] = ratio <= kSameLight && ratio * kSameLight >= 1.0;
+  });
   std::vector<Image> out;
   if (changes) changes->assign(n, MissColours{});
   for (std::size_t i = 0; i < n; ++i) {
