@@ -48,11 +48,14 @@ GBuffer grid_gbuffer(const GBuffer& g, const TraceGrid& grid) {
   auto motion = [&](const Image& full) {
     if (full.channels() < 2) return Image();
     Image m(grid.width, grid.height, 2);
-    for (std::size_t s = 0; s < grid.origin.size(); ++s) {
-      const std::int32_t p = grid.origin[s];
-      if (p < 0) continue;
-      for (int c = 0; c < 2; ++c) m.plane(c)[s] = full.plane(c)[p] * inv_scale;
-    }
+    parallel_for_rows(grid.height, [&](int by) {
+      for (int bx = 0; bx < grid.width; ++bx) {
+        const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
+        const std::int32_t p = grid.origin[s];
+        if (p < 0) continue;
+        for (int c = 0; c < 2; ++c) m.plane(c)[s] = full.plane(c)[p] * inv_scale;
+      }
+    });
     return m;
   };
   out.motion_prev = motion(g.motion_prev);
@@ -68,11 +71,15 @@ constexpr int kFaceGroup[kCubeFaces] = {0, 0, 1, 2, 0, 0};
 // denoiser carries them.
 Image grouped_shares(const Image& shares) {
   Image grouped(shares.width(), shares.height(), 3);
-  for (int f = 0; f < kCubeFaces; ++f) {
-    const float* in = shares.plane(f);
-    float* to = grouped.plane(kFaceGroup[f]);
-    for (std::size_t p = 0; p < shares.plane_size(); ++p) to[p] += in[p];
-  }
+  const int w = shares.width();
+  parallel_for_rows(shares.height(), [&](int y) {
+    const std::size_t row = static_cast<std::size_t>(y) * w;
+    for (int f = 0; f < kCubeFaces; ++f) {
+      const float* in = shares.plane(f) + row;
+      float* to = grouped.plane(kFaceGroup[f]) + row;
+      for (int x = 0; x < w; ++x) to[x] += in[x];
+    }
+  });
   return grouped;
 }
 
@@ -141,11 +148,14 @@ TracedLight FrameStages::trace_light(const GBuffer& g) const {
                     window ? &out.reflected : nullptr);
   out.light = denoise_on_grid(g, std::move(out.light));
   if (shares.channels() != kCubeFaces) return out;
+  // Each face's sum in pixel order, the faces in parallel.
   double face_total[kCubeFaces] = {};
-  for (int f = 0; f < kCubeFaces; ++f) {
+  parallel_for_rows(kCubeFaces, [&](int f) {
     const float* in = shares.plane(f);
-    for (std::size_t p = 0; p < shares.plane_size(); ++p) face_total[f] += in[p];
-  }
+    double total = 0;
+    for (std::size_t p = 0; p < shares.plane_size(); ++p) total += in[p];
+    face_total[f] = total;
+  });
   for (int group = 0; group < 3; ++group) {
     double weight = 0, colour[3] = {};
     for (int f = 0; f < kCubeFaces; ++f) {
