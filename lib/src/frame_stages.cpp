@@ -123,8 +123,11 @@ Image FrameStages::trace(const GBuffer& g, GBuffer* grid_out, Image* coverage,
   MissedRays missed;
   WeightedHits hits = trace_slices(g, grid, s, misses, keep ? &missed : nullptr);
   Image light = gather_bounces(grid, hits, s.bounces, misses, coverage, cube);
+  if (!keep) {
+    if (shares) *shares = std::move(hits.cube);
+    return light;
+  }
   if (shares) *shares = hits.cube;
-  if (!keep) return light;
   *keep = std::make_shared<FrameTrace>(g.frame, g.camera, std::move(grid), std::move(hits), misses,
                                        std::move(missed));
   return light;

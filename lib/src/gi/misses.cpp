@@ -116,7 +116,7 @@ MissModel::MissModel(const GBuffer& g, MissMode mode, const Environment& env)
   };
   const int columns = (w - stride / 2 + stride - 1) / stride;
   const int rows = (h - stride / 2 + stride - 1) / stride;
-  std::vector<Point> lattice(static_cast<std::size_t>(columns) * rows);
+  UninitializedVector<Point> lattice(static_cast<std::size_t>(columns) * rows);
   parallel_for_rows(rows, [&](int j) {
     const int y = stride / 2 + j * stride;
     for (int i = 0; i < columns; ++i) {
