@@ -74,12 +74,16 @@ struct View {
         light(own_light ? 2 * t.grid.origin.size() : 0) {
     const TraceGrid& g = t.grid;
     if (light.empty()) return;
-    for (std::size_t s = 0; s < g.origin.size(); ++s)
-      for (int c = 0; c < 3; ++c) {
-        const float back = g.origin[s] < 0 ? 0.0f : g.albedo.plane(c)[s] * own_light->plane(c)[s];
-        light[2 * s][c] = g.reflected.plane(c)[s] + back;
-        light[2 * s + 1][c] = back;
+    parallel_for_rows(g.height, [&](int by) {
+      for (int bx = 0; bx < g.width; ++bx) {
+        const std::size_t s = static_cast<std::size_t>(by) * g.width + bx;
+        for (int c = 0; c < 3; ++c) {
+          const float back = g.origin[s] < 0 ? 0.0f : g.albedo.plane(c)[s] * own_light->plane(c)[s];
+          light[2 * s][c] = g.reflected.plane(c)[s] + back;
+          light[2 * s + 1][c] = back;
+        }
       }
+    });
   }
 
   // The camera-space point of trace sample s's vertex.
