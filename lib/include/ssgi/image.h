@@ -61,12 +61,12 @@ struct Box2i {
 // An image with zero channels is "absent" (a pass the input does not provide).
 class Image {
  public:
-  // The planes, one after the other.
+  // The planes, one after the other. Growing it (resize) leaves the new values unset.
   using Planes = detail::UninitializedVector<float>;
 
   Image() = default;
   // Every value `fill`, written in parallel: a frame's planes are tens of megabytes, and one
-  // thread writing them (the first touch of their pages) was a serial part of every frame.
+  // thread writing them (the first touch of their pages) would be a serial part of every frame.
   Image(int width, int height, int channels, float fill = 0.0f);
 
   int width() const { return width_; }
