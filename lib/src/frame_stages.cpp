@@ -94,7 +94,7 @@ int pyramid_level(int scale) {
 
 Image FrameStages::trace(const GBuffer& g, GBuffer* grid_out, Image* coverage,
                          std::shared_ptr<FrameTrace>* keep, CubeLight* cube, Image* shares,
-                         Image* reflected_out) const {
+                         Image* reflected_out, const LitViews* views) const {
   const GiSettings& s = settings_;
   const Image reflected = reflected_radiance(g, plan_.gather_emission);
   TraceGrid grid =
@@ -120,6 +120,25 @@ Image FrameStages::trace(const GBuffer& g, GBuffer* grid_out, Image* coverage,
     case Tracer::kSlices:
       break;
   }
+  if (views && !views->empty()) {
+    MissedRays missed;
+    WeightedHits hits = trace_slices(g, grid, s, misses, &missed);
+    auto t = std::make_shared<FrameTrace>(g.frame, g.camera, std::move(grid), std::move(hits),
+                                          misses, std::move(missed));
+    std::vector<const FrameTrace*> traces;
+    std::vector<const Image*> lights;
+    for (std::size_t i = 0; i < views->traces.size(); ++i) {
+      traces.push_back(views->traces[i].get());
+      lights.push_back(&views->light[i]);
+    }
+    ViewsReport report;
+    continue_in_views(t.get(), traces, lights, s, &report);
+    log_info(report.describe(g.frame));
+    Image light = gather_bounces(t->grid, t->hits, s.bounces, misses, coverage, cube);
+    if (shares) *shares = t->hits.cube;
+    if (keep) *keep = std::move(t);
+    return light;
+  }
   MissedRays missed;
   WeightedHits hits = trace_slices(g, grid, s, misses, keep ? &missed : nullptr);
   Image light = gather_bounces(grid, hits, s.bounces, misses, coverage, cube);
@@ -140,7 +159,41 @@ Image FrameStages::denoise_on_grid(const GBuffer& g, Image light) const {
                               level);
 }
 
-TracedLight FrameStages::trace_light(const GBuffer& g) const {
+LitViews FrameStages::light_views(const std::vector<GBuffer>& views, int frame) const {
+  LitViews out;
+  if (!plan_.views) return out;
+  for (const GBuffer& v : views) {
+    GBuffer numbered = v;
+    numbered.frame = frame;
+    std::shared_ptr<FrameTrace> t;
+    Image light = trace(numbered, nullptr, nullptr, &t);
+    out.light.push_back(denoise_on_grid(numbered, std::move(light)));
+    out.traces.push_back(std::move(t));
+  }
+  // Light bounces among the views: each one's missed rays continued in the others, which bring
+  // their light of the pass before (one more bounce for each of their own).
+  if (out.traces.size() < 2) return out;
+  std::vector<Image> again(out.traces.size());
+  for (std::size_t i = 0; i < out.traces.size(); ++i) {
+    std::vector<const FrameTrace*> others;
+    std::vector<const Image*> lights;
+    for (std::size_t j = 0; j < out.traces.size(); ++j) {
+      if (j == i) continue;
+      others.push_back(out.traces[j].get());
+      lights.push_back(&out.light[j]);
+    }
+    FrameTrace& t = *out.traces[i];
+    if (continue_in_views(&t, others, lights, settings_, nullptr))
+      again[i] =
+          denoise_on_grid(views[i], gather_bounces(t.grid, t.hits, settings_.bounces, t.misses));
+    else
+      again[i] = out.light[i];
+  }
+  out.light = std::move(again);
+  return out;
+}
+
+TracedLight FrameStages::trace_light(const GBuffer& g, const LitViews* views) const {
   TracedLight out;
   // The window levels the misses' colours over its frames (window_lights).
   const bool window = plan_.temporal == TemporalMode::kWindow;
@@ -148,7 +201,7 @@ TracedLight FrameStages::trace_light(const GBuffer& g) const {
   Image shares;
   out.light = trace(g, &out.grid, &out.coverage, plan_.multiframe > 0 ? &out.trace : nullptr,
                     window ? &cube : nullptr, window ? &shares : nullptr,
-                    window ? &out.reflected : nullptr);
+                    window ? &out.reflected : nullptr, views);
   out.light = denoise_on_grid(g, std::move(out.light));
   if (shares.channels() != kCubeFaces) return out;
   // Each face's sum in pixel order, the faces in parallel.
@@ -189,7 +242,7 @@ Image FrameStages::finish_light(const GBuffer& g, const Image& grid_light) const
                               false);
 }
 
-Image FrameStages::indirect_light(const GBuffer& g, Image* coverage) const {
+Image FrameStages::indirect_light(const GBuffer& g, Image* coverage, const LitViews* views) const {
   // Without a temporal stage in between, one pass of the pyramid filters and upsamples (its
   // guides are built once): finish_light(trace_light(g)) but for the 1e-3 own-value fallback
   // of pixels no coarse sample resembles, which takes the traced light here, the filtered one
@@ -197,7 +250,8 @@ Image FrameStages::indirect_light(const GBuffer& g, Image* coverage) const {
   const Plan& plan = plan_;
   const int level = pyramid_level(plan.trace_scale);
   GBuffer grid;
-  Image light = trace(g, coverage ? &grid : nullptr, coverage);
+  Image light =
+      trace(g, coverage ? &grid : nullptr, coverage, nullptr, nullptr, nullptr, nullptr, views);
   if (coverage) *coverage = finish_coverage(g, grid, *coverage);
   if (level == 0 && !plan.denoise) return light;
   return upsample_and_denoise(light, level, g.depth, g.normal, settings_.denoise_settings,

@@ -18,6 +18,14 @@
 
 namespace ssgi::detail {
 
+// A frame's views (--view), lit by FrameStages::light_views: per view, its trace (what the
+// frame's rays continued there meet) and its indirect light on its trace grid.
+struct LitViews {
+  std::vector<std::shared_ptr<FrameTrace>> traces;
+  std::vector<Image> light;
+  bool empty() const { return traces.empty(); }
+};
+
 class FrameStages {
  public:
   // Loads what the whole run shares (the colour config and its processors, the environment
@@ -30,9 +38,15 @@ class FrameStages {
   // The run's colour spaces: read_gbuffer takes it, and the outputs go through it.
   const ColorManagement& color() const { return color_; }
 
+  // The frame's views (each as read_views gives it: a pinhole G-buffer with a world transform)
+  // lit as frames are, each at its own resolution, with their rays continued in one another
+  // (continue_in_views) so that light bounces among them; `frame` numbers their noise. Empty
+  // when the plan continues rays in no view (Plan::views).
+  LitViews light_views(const std::vector<GBuffer>& views, int frame) const;
+
   // The frame's light traced and denoised on the trace grid, with what the temporal stage needs
-  // of it (TracedLight).
-  TracedLight trace_light(const GBuffer& frame) const;
+  // of it (TracedLight); with `views`, its missed rays continued in them first.
+  TracedLight trace_light(const GBuffer& frame, const LitViews* views = nullptr) const;
 
   // Plan::multiframe: TracedLight::light and ::coverage of window[center] (frame `frame`) with
   // its missed rays continued in the other frames of `window` (TracedLight of each, ascending
@@ -54,7 +68,8 @@ class FrameStages {
                         const Image& grid_coverage) const;
 
   // Pipeline::indirect_light, Pipeline::describe_misses and Pipeline::composite.
-  Image indirect_light(const GBuffer& frame, Image* coverage = nullptr) const;
+  Image indirect_light(const GBuffer& frame, Image* coverage = nullptr,
+                       const LitViews* views = nullptr) const;
   std::string describe_misses(const GBuffer& frame) const;
   FrameResult composite(const GBuffer& frame, Image indirect, Image coverage = {}) const;
   // composite() written over the frame's albedo and beauty (composite_frame_in_place), for a
@@ -67,9 +82,11 @@ class FrameStages {
   // coverage there (gather_bounces), when `keep` is (multiframe), what continuing rays needs.
   // With `cube` and `shares`, the last bounce's cube colours and the samples' shares of them,
   // with `reflected` the light the samples reflect.
+  // With `views` (not empty), the missed rays are continued in them before the bounces.
   Image trace(const GBuffer& g, GBuffer* grid_out, Image* coverage,
               std::shared_ptr<FrameTrace>* keep = nullptr, CubeLight* cube = nullptr,
-              Image* shares = nullptr, Image* reflected = nullptr) const;
+              Image* shares = nullptr, Image* reflected = nullptr,
+              const LitViews* views = nullptr) const;
 
   // Traced light on the trace grid denoised there (the pyramid from the grid's level), when
   // the plan denoises: TracedLight::light.

@@ -203,6 +203,30 @@ Plan make_plan(const SequenceInfo& seq, const GiSettings& s) {
           "has no world transform, or is the frame's own, add nothing)");
     }
   }
+  if (!seq.views.empty()) {
+    if (s.tracer != Tracer::kSlices) {
+      plan.warnings.push_back(
+          "--view: the views are not read: only the slice tracer's missed "
+          "rays continue in them (--tracer slices)");
+      plan.reasons.push_back("views: off (the slice tracer's misses only)");
+    } else {
+      plan.views = true;
+      std::size_t pinhole = 0, latlong = 0;
+      for (const ViewInfo& v : seq.views)
+        ++(v.projection == Projection::kLatLong ? latlong : pinhole);
+      std::string which;
+      if (pinhole) which = std::to_string(pinhole) + (pinhole == 1 ? " view" : " views");
+      if (latlong)
+        which += (which.empty() ? "" : " and ") + std::to_string(latlong) +
+                 (latlong == 1 ? " lat-long view (six cube faces)"
+                               : " lat-long views (six cube faces each)");
+      plan.reasons.push_back(
+          "views: missed rays continued in " + which +
+          ", each lit as a frame is (its own rays, misses and bounces, continued in the others), "
+          "the nearest surface any of them shows on a ray taken" +
+          (plan.multiframe ? "; what they miss goes on to the other frames (multiframe)" : ""));
+    }
+  }
   plan.reasons.push_back("composite: direct + emission + albedo x indirect");
   return plan;
 }

@@ -19,6 +19,7 @@
 #include "frame_stages.h"
 #include "gi/multiframe.h"
 #include "gi/temporal.h"
+#include "io/views.h"
 #include "parallel.h"
 #include "ssgi/error.h"
 #include "ssgi/log.h"
@@ -268,6 +269,12 @@ class Processor {
                        static_cast<int>(seq_.frames_on_disk.size()))
             : 0;
     steps_ = plan_steps(seq_, parts_, mode_, radius_, preroll, job.reuse, read_twice_);
+    if (stages_.plan().views) {
+      std::vector<int> read;
+      for (const Step& s : steps_)
+        if (s.read != kNoFrame && !s.again) read.push_back(s.read);
+      check_views_cover(seq_, read);
+    }
     for (int i = 0; i < static_cast<int>(seq_.frames.size()); ++i)
       if (!job.reuse[i]) output_index_[seq_.frames[i]] = i;
   }
@@ -326,6 +333,8 @@ class Processor {
     }
     try {
       d.frame = read_input_frame(seq_, step.read, roles, *job_.input, &stages_.color(), report);
+      if (plan.views && !step.again)
+        d.frame->views = read_views(seq_, step.read, *job_.input, &stages_.color());
     } catch (const Error& e) {
       d.error = error_of(e);
     } catch (const std::bad_alloc&) {
@@ -406,7 +415,9 @@ class Processor {
   std::optional<InputFrame> take(const Step& s, InputFrame frame) {
     const int n = seq_.frames[s.output];
     if (mode_ == TemporalMode::kNone) return frame;
-    TracedLight traced = stages_.trace_light(frame.g);
+    const LitViews views = stages_.light_views(frame.views, frame.g.frame);
+    frame.views.clear();
+    TracedLight traced = stages_.trace_light(frame.g, &views);
     if (mode_ == TemporalMode::kEma) {
       if (s.restart) ema_valid_ = false;
       ema_step(parts_.index(s.read), std::move(traced));
@@ -505,12 +516,15 @@ class Processor {
         throw Error(ErrorKind::kInternal, seq_.pattern.path_for(n),
                     "frame " + std::to_string(n) + " was not read");
       m->input = std::move(own->input);
+      const LitViews views =
+          mode_ == TemporalMode::kNone ? stages_.light_views(own->views, own->g.frame) : LitViews();
+      own->views.clear();
       g = std::make_shared<GBuffer>(std::move(own->g));
       if (mode_ == TemporalMode::kEma) {
         indirect = stages_.finish_light(*g, ema_out_);
         coverage = stages_.finish_coverage(*g, ema_grid_, ema_coverage_);
       } else {
-        indirect = stages_.indirect_light(*g, &coverage);
+        indirect = stages_.indirect_light(*g, &coverage, &views);
       }
     }
     // Unless a callback or the preview reads the passes after it, the composite is written over

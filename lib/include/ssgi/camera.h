@@ -15,6 +15,17 @@ namespace ssgi {
 // product of the row lengths (a scale-free test), or any entry not finite.
 Imath::M44d inverse_checked(const Imath::M44d& m);
 
+// How a camera maps directions to pixels. A frame is always a pinhole; a view (--view) may be
+// a latitude-longitude panorama, which the reader turns into six pinhole cube faces.
+enum class Projection {
+  kPinhole,
+  // Equirectangular, 360 x 180 degrees over the display window: the centre looks along +z, the
+  // longitude grows to the right (towards +x), the top row looks straight up (+y). fx and fy
+  // are pixels per radian (W / 2 pi, H / pi), (cx, cy) the display window's centre, and depth
+  // is the distance from the camera along the pixel's ray.
+  kLatLong,
+};
+
 // A pinhole camera in the library's camera space (OpenEXR worldToCamera: x right, y up,
 // +z forward, depth positive in front) projecting onto display-window pixels, y down.
 // Pixel (i, j) has its centre at (i + 0.5, j + 0.5), i.e. NDC ((i+0.5)/W, (j+0.5)/H).
@@ -23,6 +34,7 @@ struct Camera {
   // display window's top-left corner, so the window spans [0, W] x [0, H]). fx, fy > 0; an
   // off-centre (shifted) camera has (cx, cy) away from (W/2, H/2).
   double fx = 1, fy = 1, cx = 0, cy = 0;
+  Projection projection = Projection::kPinhole;
   // Whether world_to_camera is known (header matrices, sidecar, or a fit to the position
   // pass); a --fov camera has none,
   // and then world-space inputs (normals, env maps) are taken as camera-space.
@@ -42,7 +54,9 @@ struct Camera {
   // Camera-space point to continuous display-window pixel coordinates. Meaningful for
   // p.z > 0 only: the caller tests z (behind the camera the result is mirrored or infinite).
   void project(const Imath::V3d& p, double* px, double* py) const;
-  // Continuous display-window pixel coordinates and planar depth z to a camera-space point.
+  // For a lat-long camera, any p but the origin: the longitude and latitude of its direction.
+  // Continuous display-window pixel coordinates and planar depth z to a camera-space point (for
+  // a lat-long camera, z is the distance along the pixel's ray).
   Imath::V3d unproject(double px, double py, double z) const;
   // Unit camera-space view direction through continuous pixel coordinates.
   Imath::V3d view_dir(double px, double py) const;
@@ -60,6 +74,13 @@ Camera camera_from_fov(double hfov_deg, const Box2i& display_window, double pixe
 // +z forward. Throws Error(kInput) naming `file` on a singular or non-finite matrix, or when
 // inverse(worldToCamera) * worldToNDC is not a pinhole projection at the camera origin
 // (orthographic, skewed, tilted) or looks like a -1..1 screen matrix.
+// A lat-long camera (Projection::kLatLong) over `display_window` with the header's
+// worldToCamera, whose camera space looks along -z with +y up (as Blender, Arnold, Houdini and
+// USD write it): flipped to the library's +z forward. Source "header worldToCamera (lat-long)".
+// Throws Error(kInput) naming `file` on a singular or non-finite matrix.
+Camera latlong_camera(const Imath::M44d& world_to_camera, const Box2i& display_window,
+                      const std::string& file);
+
 Camera camera_from_matrices(const Imath::M44d& world_to_camera, const Imath::M44d& world_to_ndc,
                             const Box2i& display_window, const std::string& file);
 
@@ -72,6 +93,8 @@ namespace ssgi {
 struct CameraOptions {
   double hfov_deg = 0;  // --fov: > 0 gives a static camera with this horizontal field of view
   std::string sidecar;  // --camera FILE.json: per-frame cameras (format in man/ssgi-cameras.7)
+  // A view's (--view): a lat-long view's camera is its header's worldToCamera alone.
+  Projection projection = Projection::kPinhole;
 };
 
 }  // namespace ssgi

@@ -19,6 +19,14 @@ class ColorManagement;
 using RoleMask = unsigned;
 constexpr RoleMask role_bit(Role role) { return 1u << static_cast<int>(role); }
 
+// An extra view of the shot's scene (--view, --latlong-view): a sequence with the shot's frame
+// numbers, or a still (a file name without a frame field) for every frame of a locked-off
+// camera.
+struct ViewOptions {
+  std::string pattern;
+  Projection projection = Projection::kPinhole;
+};
+
 // What the user said about the input sequence.
 struct InputOptions {
   std::string pattern;                         // e.g. "shot.####.exr"
@@ -37,6 +45,23 @@ struct InputOptions {
   // shot and display window, a data window holding this one's); their passes fill what the
   // data window lacks, so that rays leaving it meet what the whole frame shows. Empty: none.
   std::string context;
+  // --view and --latlong-view: read with the options above (the layout, --channel and the
+  // conventions; each view's camera its own header's).
+  std::vector<ViewOptions> views;
+};
+
+struct SequenceInfo;
+
+// An extra view as probed from its first file.
+struct ViewInfo {
+  std::string pattern;  // as given
+  Projection projection = Projection::kPinhole;
+  bool still = false;  // one file for every frame
+  // Its files as a sequence of their own (its windows, channels and layout; its frames those
+  // on disk). For a still, the pattern is the file name itself.
+  std::shared_ptr<const SequenceInfo> sequence;
+  // The file frame `frame` of the shot reads.
+  std::string path_for(int frame) const;
 };
 
 // A sequence as found on disk, probed from its first frame.
@@ -56,6 +81,8 @@ struct SequenceInfo {
   // --context: the context's frames as probed from their first (its frames those of this
   // sequence); the G-buffers read cover its data window. Null without --context.
   std::shared_ptr<const SequenceInfo> context;
+  // --view, --latlong-view: the extra views, in the order given.
+  std::vector<ViewInfo> views;
 
   // The window the G-buffers read cover: the context's data window, else the data window.
   const Box2i& working_window() const { return context ? context->data_window : data_window; }

@@ -21,6 +21,7 @@ struct Plan {
   bool denoise = false;
   TemporalMode temporal = TemporalMode::kNone;
   int multiframe = 0;                // frames each side that missed rays are continued in (0: none)
+  bool views = false;                // missed rays continued in the shot's views (--view) first
   std::vector<std::string> reasons;  // one line per decision, for `ssgi info` and -v
   std::vector<std::string> warnings;  // what `ssgi run` and `ssgi info` warn about, one line each
 };

@@ -49,6 +49,7 @@ class HeldHits final : public HitSource {
   const Image& miss() const override { return hits_.miss; }
   const Image& env() const override { return hits_.env; }
   const Image& cube() const override { return hits_.cube; }
+  const Image* foreign() const override { return hits_.foreign.empty() ? nullptr : &hits_.foreign; }
 
  private:
   int width_;

@@ -36,6 +36,9 @@ struct WeightedHits {
   Image miss;  // 1 channel: the share that met nothing
   Image env;   // 3 channels: environment light of those directions
   Image cube;  // kCubeFaces channels: their shares of the miss model's cube
+  // 3 channels or absent: light that missed rays continued in the frame's views brought
+  // (multiframe.h, continue_in_views), counted as traced; their shares are out of the three above.
+  Image foreign;
   std::size_t entries() const { return pixel.size(); }
   // Row `by`'s hits, of a grid `width` samples across.
   HitRow row(int by, int width) const {

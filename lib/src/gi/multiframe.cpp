@@ -68,11 +68,13 @@ struct View {
   std::vector<std::array<float, 3>> light;
 
   // `own_light` null: the light of one bounce (what the surfaces reflect, their backs nothing).
-  View(const FrameTrace& t, const Image* own_light)
+  // A view's (`grazing`) mesh also joins neighbours on one plane seen at a grazing angle.
+  View(const FrameTrace& t, const Image* own_light, bool grazing = false)
       : trace(&t),
         mesh(t.grid.depth, t.grid.thickness),
         light(own_light ? 2 * t.grid.origin.size() : 0) {
     const TraceGrid& g = t.grid;
+    if (grazing) mesh.join_tangent_neighbours(g.depth, g.normal, g.fx, g.fy, g.cx, g.cy);
     if (light.empty()) return;
     parallel_for_rows(g.height, [&](int by) {
       for (int bx = 0; bx < g.width; ++bx) {
@@ -256,6 +258,141 @@ std::string ContinuationReport::describe(int frame) const {
   return s.str();
 }
 
+std::string ViewsReport::describe(int frame) const {
+  std::ostringstream s;
+  s << "frame " << frame << ": views: ";
+  if (views == 0)
+    return s.str() + "nothing continued (no view with a camera other than the frame's)";
+  s << rays << " missed rays continued in " << views << (views == 1 ? " view" : " views") << "; "
+    << found << " met a surface";
+  if (refused) s << ", " << refused << " more met only surfaces the frame sees past (not taken)";
+  return s.str();
+}
+
+bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrace*>& views,
+                       const std::vector<const Image*>& light, const GiSettings& settings,
+                       ViewsReport* report) {
+  FrameTrace& self = *self_trace;
+  ViewsReport local;
+  ViewsReport& r = report ? *report : local;
+  r = ViewsReport();
+  if (!self.camera.has_world_transform) return false;
+  std::vector<View> all;
+  all.reserve(views.size() + 1);
+  all.emplace_back(self, nullptr);  // the frame's own view only tells what it sees
+  std::vector<Neighbour> neighbours;
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    if (!views[i]->camera.has_world_transform) continue;
+    all.emplace_back(*views[i], settings.bounces > 1 ? light[i] : nullptr, true);
+    neighbours.push_back({&all.back(), between(self.camera, views[i]->camera),
+                          between(views[i]->camera, self.camera)});
+  }
+  r.views = static_cast<int>(neighbours.size());
+  if (neighbours.empty() || self.missed.rays.empty()) return false;
+  const View& own = all.front();
+  const TraceGrid& grid = self.grid;
+  WeightedHits& hits = self.hits;
+  if (hits.foreign.empty()) hits.foreign = Image(grid.width, grid.height, 3);
+  // The rays still missed, row by row, for the shot's other frames to continue (multiframe).
+  std::vector<std::vector<MissedRay>> row_left(static_cast<std::size_t>(grid.height));
+  std::vector<std::uint32_t> left_count(grid.origin.size(), 0);
+  std::atomic<std::size_t> rays{0}, found{0}, refused{0};
+  parallel_for_rows(grid.height, [&](int by) {
+    std::size_t row_rays = 0, row_found = 0, row_refused = 0;
+    for (int bx = 0; bx < grid.width; ++bx) {
+      const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
+      const std::uint32_t first = self.missed.begin[s], end = self.missed.begin[s + 1];
+      if (first == end) continue;
+      const Imath::V3f o = self.missed.origin[s];
+      float sum[3] = {0, 0, 0}, env_found[3] = {0, 0, 0}, cube_found[kCubeFaces] = {};
+      float miss_found = 0;
+      for (std::uint32_t k = first; k < end; ++k) {
+        const MissedRay& ray = self.missed.rays[k];
+        const float jitter = ray_jitter(s, k - first, self.frame, settings.seed);
+        const float t_from =
+            first_hidden(own, o, ray.direction, leaves_view(grid, o, ray.direction, o.z), o.z,
+                         settings.max_steps, jitter);
+        // Views at the frame's own time: of the surfaces they show on the ray, the nearest.
+        const Neighbour* best = nullptr;
+        std::int32_t best_hit = -1;
+        float best_along = std::numeric_limits<float>::infinity();
+        bool was_refused = false;
+        if (!std::isinf(t_from)) {
+          ++row_rays;
+          for (const Neighbour& n : neighbours) {
+            const Imath::V3f on = n.from_center.point(o);
+            const Imath::V3f dn = n.from_center.direction(ray.direction);
+            const std::int32_t hit = march_in(*n.view, on, dn, t_from, o.z, jitter, settings);
+            if (hit < 0) continue;
+            const float along = (n.view->vertex(hit_pixel(hit)) - on).dot(dn);
+            if (!(along < best_along)) continue;
+            if (seen_past(own, n.to_center.point(on + along * dn))) {
+              was_refused = true;
+              continue;
+            }
+            best = &n;
+            best_hit = hit;
+            best_along = along;
+          }
+        }
+        if (!best) {
+          if (was_refused) ++row_refused;
+          row_left[by].push_back(ray);
+          ++left_count[s];
+          continue;
+        }
+        const std::int32_t h = hit_pixel(best_hit);
+        if (best->view->light.empty()) {  // one bounce: what the surface reflects, if its front
+          if (best_hit == h)
+            for (int c = 0; c < 3; ++c)
+              sum[c] += ray.weight * best->view->trace->grid.reflected.plane(c)[h];
+        } else {
+          const std::array<float, 3>& l =
+              best->view->light[2 * static_cast<std::size_t>(h) + (best_hit == h ? 0 : 1)];
+          for (int c = 0; c < 3; ++c) sum[c] += ray.weight * l[c];
+        }
+        self.misses.add(ray.direction, ray.weight, env_found, cube_found);
+        miss_found += ray.weight;
+        ++row_found;
+      }
+      // The found rays' shares leave the miss model, as continue_rays takes them out.
+      for (int c = 0; c < 3; ++c) {
+        hits.foreign.plane(c)[s] += sum[c];
+        hits.env.plane(c)[s] = std::max(hits.env.plane(c)[s] - env_found[c], 0.0f);
+      }
+      for (int f = 0; f < kCubeFaces; ++f)
+        hits.cube.plane(f)[s] = std::max(hits.cube.plane(f)[s] - cube_found[f], 0.0f);
+      hits.miss.plane(0)[s] = std::max(hits.miss.plane(0)[s] - miss_found, 0.0f);
+    }
+    rays += row_rays;
+    found += row_found;
+    refused += row_refused;
+  });
+  r.rays = rays;
+  r.found = found;
+  r.refused = refused;
+  // The rays left, in trace-sample order.
+  std::vector<std::uint32_t> row_start(static_cast<std::size_t>(grid.height) + 1, 0);
+  for (int by = 0; by < grid.height; ++by)
+    row_start[by + 1] = row_start[by] + static_cast<std::uint32_t>(row_left[by].size());
+  MissedRays left;
+  left.origin = std::move(self.missed.origin);
+  left.begin.resize(grid.origin.size() + 1);
+  left.rays.resize(row_start.back());
+  parallel_for_rows(grid.height, [&](int by) {
+    std::uint32_t at = row_start[by];
+    for (int bx = 0; bx < grid.width; ++bx) {
+      const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
+      left.begin[s] = at;
+      at += left_count[s];
+    }
+    std::copy(row_left[by].begin(), row_left[by].end(), left.rays.begin() + row_start[by]);
+  });
+  left.begin.back() = row_start.back();
+  self.missed = std::move(left);
+  return r.found > 0;
+}
+
 bool continue_rays(const std::vector<const FrameTrace*>& frames,
                    const std::vector<const Image*>& light, int center, const GiSettings& settings,
                    Image* out, Image* coverage, Image* shares, ContinuationReport* report) {
@@ -288,7 +425,8 @@ bool continue_rays(const std::vector<const FrameTrace*>& frames,
   const View& own = views.front();
   const TraceGrid& grid = self.grid;
   Image miss = self.hits.miss, env = self.hits.env, cube = self.hits.cube;
-  Image foreign(grid.width, grid.height, 3);
+  // What the views found (continue_in_views) stays; the neighbours' light adds to it.
+  Image foreign = self.hits.foreign.empty() ? Image(grid.width, grid.height, 3) : self.hits.foreign;
   std::atomic<std::size_t> rays{0}, found{0}, moving{0};
   parallel_for_rows(grid.height, [&](int by) {
     std::size_t row_rays = 0, row_found = 0, row_moving = 0;
@@ -348,7 +486,7 @@ bool continue_rays(const std::vector<const FrameTrace*>& frames,
       // (Shrinking all the shares by the found part of the misses instead measured worse: it
       // leaves part of the found direction's share in place, counting that light twice.)
       for (int c = 0; c < 3; ++c) {
-        foreign.plane(c)[s] = sum[c];
+        foreign.plane(c)[s] += sum[c];
         env.plane(c)[s] = std::max(env.plane(c)[s] - env_found[c], 0.0f);
       }
       for (int f = 0; f < kCubeFaces; ++f)

@@ -73,6 +73,33 @@ struct FrameTrace {
   void release_own();
 };
 
+// The continuation's numbers for a frame's views (-v).
+struct ViewsReport {
+  int views = 0;            // views with a camera other than the frame's
+  std::size_t rays = 0;     // missed rays continued (not seen free to their vanishing point)
+  std::size_t found = 0;    // of those, the ones that met a surface in a view
+  std::size_t refused = 0;  // rays that met only surfaces the frame sees past (not taken)
+  std::string describe(int frame) const;
+};
+
+// Views (--view): other cameras on the same scene at the frame's own time (the six faces of a
+// cube or a panorama rendered at the camera, a wider overscan render), each lit as a frame is.
+// Every missed ray of `*self` is marched on in the depth buffer of each view, from the same
+// world-space point in the same direction, from where the frame stops seeing it free (off its
+// edge, behind the camera, or behind what it shows), and takes the nearest surface any view
+// shows on it, unless the frame sees past that point (as continue_rays refuses a moving object).
+// The surface brings what it reflects plus its albedo x the view's own indirect light
+// (`light`: per view, on its trace grid; unread for --bounces 1), as continue_rays' neighbours
+// do. Into self->hits: that light per trace sample in `foreign` (added), the found rays' shares
+// taken out of miss, env and cube; self->missed keeps only the rays still missed, for the shot's
+// other frames to continue. A view's mesh also joins neighbours that lie on one plane seen at a
+// grazing angle (DepthMesh::join_tangent_neighbours): a view's few pixels see much of the scene
+// so. True when a ray met a surface; nothing changes without a world transform for the frame's
+// camera.
+bool continue_in_views(FrameTrace* self, const std::vector<const FrameTrace*>& views,
+                       const std::vector<const Image*>& light, const GiSettings& settings,
+                       ViewsReport* report);
+
 // Frame frames[center]'s light on its trace grid with its missed rays continued in the other
 // frames (in ascending frame order, each with its own light on its grid, before any temporal
 // filter), after `settings.bounces` gathers, into *out; with `coverage`, gather_bounces'

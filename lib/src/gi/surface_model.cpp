@@ -93,4 +93,35 @@ DepthMesh::DepthMesh(const Image& depth, const Image& thickness)
   });
 }
 
+void DepthMesh::join_tangent_neighbours(const Image& depth, const Image& normal, float fx, float fy,
+                                        float cx, float cy) {
+  const float* z = depth.plane(0);
+  const auto point = [&](std::size_t p) {
+    const float sx = static_cast<float>(p % width_) + 0.5f;
+    const float sy = static_cast<float>(p / width_) + 0.5f;
+    return Imath::V3f((sx - cx) / fx * z[p], (cy - sy) / fy * z[p], z[p]);
+  };
+  const auto n = [&](std::size_t p) {
+    return Imath::V3f(normal.plane(0)[p], normal.plane(1)[p], normal.plane(2)[p]);
+  };
+  parallel_for_rows(height_ - 1, [&](int j) {
+    const std::size_t row = static_cast<std::size_t>(j) * width_;
+    auto connect = [&](std::size_t p, std::size_t q) {
+      if (connected(z[p], static_cast<int>(p), z[q], static_cast<int>(q))) return true;
+      if (!std::isfinite(z[p]) || !std::isfinite(z[q])) return false;
+      const Imath::V3f a = point(p), b = point(q);
+      return std::fabs((b - a).dot(n(p))) <= kSmoothTolerance * z[p] &&
+             std::fabs((a - b).dot(n(q))) <= kSmoothTolerance * z[q];
+    };
+    for (int i = 0; i + 1 < width_; ++i) {
+      const std::size_t a = row + i, r = a + 1, d = a + width_, c = a + width_ + 1;
+      const bool diagonal = connect(a, c);
+      std::uint8_t t = 0;
+      if (diagonal && connect(a, r) && connect(r, c)) t |= kUpper;
+      if (diagonal && connect(a, d) && connect(d, c)) t |= kLower;
+      triangles_[a] = t;
+    }
+  });
+}
+
 }  // namespace ssgi::detail

@@ -113,6 +113,14 @@ class DepthMesh {
     return z * (1.0f + thickness_[static_cast<std::size_t>(pixel)]);
   }
 
+  // Also joins neighbours that lie on each other's tangent planes (each within kSmoothTolerance
+  // of its depth of the other's), as the pixels of a plane seen at a grazing angle do although
+  // their depths differ by more than a slab. For views (multiframe.h, continue_in_views), whose
+  // few pixels see much of the scene at such angles; `normal` is per pixel, (fx, fy, cx, cy) the
+  // camera in its pixels.
+  void join_tangent_neighbours(const Image& depth, const Image& normal, float fx, float fy,
+                               float cx, float cy);
+
   // Whether points at depths z0 and z1 of vertices p0 and p1 belong to one continuous surface:
   // each lies within the other's slab.
   bool connected(float z0, int p0, float z1, int p1) const {

@@ -94,23 +94,62 @@ Imath::M44d inverse_checked(const Imath::M44d& m) {
 }
 
 double Camera::hfov_deg(int display_width) const {
+  if (projection == Projection::kLatLong) return 360.0;
   // Left and right edges separately, so that an off-centre principal point gives the angle
   // the image really spans.
   return rad_to_deg(std::atan(cx / fx) + std::atan((display_width - cx) / fx));
 }
 
 void Camera::project(const Imath::V3d& p, double* px, double* py) const {
+  if (projection == Projection::kLatLong) {
+    const double r = std::sqrt(p.dot(p));
+    *px = cx + fx * std::atan2(p.x, p.z);
+    *py = cy - fy * std::asin(std::clamp(p.y / r, -1.0, 1.0));
+    return;
+  }
   *px = cx + fx * p.x / p.z;
   *py = cy - fy * p.y / p.z;
 }
 
 Imath::V3d Camera::unproject(double px, double py, double z) const {
+  if (projection == Projection::kLatLong) return view_dir(px, py) * z;
   return {(px - cx) / fx * z, (cy - py) / fy * z, z};
 }
 
 Imath::V3d Camera::view_dir(double px, double py) const {
+  if (projection == Projection::kLatLong) {
+    const double longitude = (px - cx) / fx, latitude = (cy - py) / fy;
+    return {std::cos(latitude) * std::sin(longitude), std::sin(latitude),
+            std::cos(latitude) * std::cos(longitude)};
+  }
   const Imath::V3d d((px - cx) / fx, (cy - py) / fy, 1.0);
   return d / std::sqrt(d.dot(d));
+}
+
+Camera latlong_camera(const Imath::M44d& world_to_camera, const Box2i& display_window,
+                      const std::string& file) {
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j)
+      if (!std::isfinite(world_to_camera[i][j]))
+        throw_input(file, "worldToCamera has a value that is not finite");
+  try {
+    inverse_checked(world_to_camera);
+  } catch (const Error& e) {
+    throw_input(file, std::string("worldToCamera: ") + e.what());
+  }
+  Camera c;
+  c.projection = Projection::kLatLong;
+  const double w = display_window.width(), h = display_window.height();
+  c.fx = w / (2 * M_PI);
+  c.fy = h / M_PI;
+  c.cx = w / 2;
+  c.cy = h / 2;
+  // -z forward to +z forward: the third column negated (row-vector convention).
+  c.world_to_camera = world_to_camera;
+  for (int i = 0; i < 4; ++i) c.world_to_camera[i][2] = -world_to_camera[i][2];
+  c.has_world_transform = true;
+  c.source = "header worldToCamera (lat-long)";
+  return c;
 }
 
 Camera camera_from_fov(double hfov_deg, const Box2i& display_window, double pixel_aspect) {

@@ -421,6 +421,15 @@ std::optional<Camera> camera_from_header(const OIIO::ImageSpec& spec, const Box2
   return std::nullopt;
 }
 
+std::optional<Camera> latlong_camera_from_header(const OIIO::ImageSpec& spec,
+                                                 const Box2i& display_window,
+                                                 const std::string& file) {
+  std::optional<Imath::M44d> w2c = matrix_attr(spec, "worldToCamera", file);
+  if (!w2c && find_exact(spec, "worldtocamera")) w2c = matrix_attr(spec, "worldtocamera", file);
+  if (!w2c) return std::nullopt;
+  return latlong_camera(*w2c, display_window, file);
+}
+
 namespace {
 
 // The sidecar's document, read and parsed once per file (and again only if the file changes):

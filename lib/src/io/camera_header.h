@@ -50,6 +50,12 @@ namespace ssgi::detail {
 std::optional<Camera> camera_from_header(const OIIO::ImageSpec& spec, const Box2i& display_window,
                                          const std::string& file);
 
+// A lat-long camera (latlong_camera) from the header's worldToCamera, or nullopt when it has
+// none. Throws Error(kInput) naming `file` when the matrix is unusable.
+std::optional<Camera> latlong_camera_from_header(const OIIO::ImageSpec& spec,
+                                                 const Box2i& display_window,
+                                                 const std::string& file);
+
 // The camera of `frame` in the sidecar JSON file `json_path` (format above and in
 // man/ssgi-cameras.7). Throws Error(kIO) when unreadable, Error(kInput) when malformed or the frame
 // is absent.

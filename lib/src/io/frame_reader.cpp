@@ -19,6 +19,7 @@
 #include "io/input_frame.h"
 #include "io/oiio_files.h"
 #include "io/pass_agreement.h"
+#include "io/views.h"
 #include "parallel.h"
 #include "ssgi/color.h"
 #include "ssgi/error.h"
@@ -213,6 +214,10 @@ Camera find_camera(const SequenceInfo& seq, const InputOptions& options,
                    const OIIO::ImageSpec& spec, int frame, const std::string& path,
                    const FrameChannels* channels) {
   const Box2i& display = seq.display_window;
+  if (options.camera.projection == Projection::kLatLong) {
+    if (auto camera = detail::latlong_camera_from_header(spec, display, path)) return *camera;
+    throw_input(path, "no camera: a lat-long view needs worldToCamera in its header");
+  }
   if (!options.camera.sidecar.empty())
     return detail::camera_from_sidecar(options.camera.sidecar, frame, display);
   if (options.camera.hfov_deg > 0)
@@ -332,6 +337,7 @@ DepthCounts convert_depth(Image& depth, DepthKind kind, double background, const
           z = v > 0 ? 1.0 / v : inf;
           break;
         case DepthKind::kRadial: {
+          if (camera.projection == Projection::kLatLong) break;  // the distance is its depth
           const double px = x + data.x0 - display.x0 + 0.5;
           const double py = y + data.y0 - display.y0 + 0.5;
           z = static_cast<double>(v) * camera.view_dir(px, py).z;
@@ -636,7 +642,24 @@ SequenceInfo open_sequence(const InputOptions& options, bool check_header_camera
 
 }  // namespace
 
-SequenceInfo open_sequence(const InputOptions& options) { return open_sequence(options, true); }
+SequenceInfo open_sequence(const InputOptions& options) {
+  SequenceInfo seq = open_sequence(options, true);
+  if (!options.views.empty()) seq.views = detail::open_views(seq, options);
+  return seq;
+}
+
+namespace detail {
+
+std::unique_ptr<OIIO::ImageInput> open_input_exr(const std::string& path) { return open_exr(path); }
+
+SequenceInfo open_view_sequence(const InputOptions& options) {
+  InputOptions own = options;
+  own.views.clear();
+  own.context.clear();
+  return open_sequence(own, false);
+}
+
+}  // namespace detail
 
 Camera read_camera(const SequenceInfo& seq, int frame, const InputOptions& options) {
   const std::string path = seq.pattern.path_for(frame);
@@ -659,7 +682,8 @@ NormalSpace normal_space_of(const SequenceInfo& seq, const InputOptions& options
   const std::string said_by =
       options.normal_space.empty() ? "the " + preset.name + " layout says" : "--normal-space says";
   detail::NormalSpaceScores scores;
-  if (!g.depth.empty())
+  // A lat-long view's normals are not checked against its depth (the scores take a pinhole).
+  if (!g.depth.empty() && g.camera.projection == Projection::kPinhole)
     scores =
         detail::score_normal_spaces(g.normal, g.depth, g.camera, g.display_window, g.data_window);
   const detail::NormalSpaceChoice choice = detail::choose_normal_space(
@@ -753,6 +777,8 @@ GBuffer convert_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
     if (report) warn_if_no_surfaces(counts, g.depth.plane_size(), preset.depth_kind, path);
   }
   if ((roles & role_bit(Role::kNormal)) && seq.normals_from_depth) {
+    if (g.camera.projection != Projection::kPinhole)
+      throw_input(path, "has no normal channels, which a lat-long view needs");
     g.normal = detail::normals_from_depth(g.depth, g.camera, g.display_window, g.data_window);
   } else if (read_normals) {
     non_finite += sanitize(&g.normal);

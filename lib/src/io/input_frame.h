@@ -19,6 +19,7 @@ namespace ssgi::detail {
 struct InputFrame {
   GBuffer g;
   std::shared_ptr<const DecodedInput> input;
+  std::vector<GBuffer> views;  // the frame's views (io/views.h), until it is lit
 };
 
 // read_gbuffer, keeping the parts' headers (which the writer copies, and checks the file
@@ -28,6 +29,13 @@ struct InputFrame {
 InputFrame read_input_frame(const SequenceInfo& sequence, int frame, RoleMask roles,
                             const InputOptions& options, const ColorManagement* color,
                             bool report = true);
+
+// An input file opened: an OpenEXR file, or Error(kIO) naming it.
+std::unique_ptr<OIIO::ImageInput> open_input_exr(const std::string& path);
+
+// open_sequence for a view's files (io/views.h): without checking its header camera against its
+// position pass, and without views of its own.
+SequenceInfo open_view_sequence(const InputOptions& options);
 
 // Copies every plane of `src`, whose pixels cover `src_window`, into `dst`, covering
 // `dst_window`, where the two windows overlap; the rest of `dst` is left as it is. Both have the

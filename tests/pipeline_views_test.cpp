@@ -1,0 +1,236 @@
+// Views (--view, lib/src/io/views.h and continue_in_views in gi/multiframe.h): light that only a
+// view shows, behind the camera. The scene is two parallel infinite walls: one in frame, facing
+// the camera at z = kFront, dark; one behind the camera at z = -kBack, facing it and lit, so
+// that it reflects kLit. Every ray of the front wall's cosine-weighted hemisphere meets the back
+// wall: with one bounce its indirect light is kLit exactly. The frame alone does not show the
+// back wall (its rays leave the frame behind the camera); six cube faces rendered at the camera,
+// or one lat-long panorama turned into them, do.
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <vector>
+
+#include "frame_stages.h"
+#include "gtest/gtest.h"
+#include "io/views.h"
+#include "pipeline_support.h"
+
+namespace ssgi::pipeline_test {
+namespace {
+
+constexpr double kFront = 4.0, kBack = 3.0;
+constexpr float kLit = 0.8f, kAlbedo = 0.5f;
+
+// Where the ray from the origin along world-space `d` meets a wall: its parameter (infinite
+// when it meets none) and the wall's normal and reflected light.
+struct WallHit {
+  double t = std::numeric_limits<double>::infinity();
+  Imath::V3d normal{0, 0, 0};
+  float reflected = 0;
+};
+
+WallHit walls(const Imath::V3d& d) {
+  WallHit w;
+  if (d.z > 1e-12) {
+    w.t = kFront / d.z;
+    w.normal = {0, 0, -1};
+  } else if (d.z < -1e-12) {
+    w.t = kBack / -d.z;
+    w.normal = {0, 0, 1};
+    w.reflected = kLit;
+  }
+  return w;
+}
+
+// A camera's axes (right, up, forward) in world space as its world_to_camera (row vectors;
+// the camera at the origin).
+Imath::M44d world_to_camera(const Imath::V3d& right, const Imath::V3d& up,
+                            const Imath::V3d& forward) {
+  Imath::M44d m;
+  for (int i = 0; i < 3; ++i) {
+    m[i][0] = right[i];
+    m[i][1] = up[i];
+    m[i][2] = forward[i];
+  }
+  return m;
+}
+
+// The scene as seen by `camera` (at the origin) over a square or 2:1 window of `width` x
+// `height` pixels: depth (planar, or the distance for a lat-long), camera-space normals,
+// albedo, direct light.
+GBuffer render(const Camera& camera, int width, int height) {
+  GBuffer g;
+  g.display_window = g.data_window = Box2i{0, 0, width, height};
+  g.camera = camera;
+  g.depth = Image(width, height, 1);
+  g.normal = Image(width, height, 3);
+  g.albedo = Image(width, height, 3, kAlbedo);
+  g.direct = Image(width, height, 3);
+  const Imath::M44d& m = camera.world_to_camera;
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const Imath::V3d c = camera.view_dir(x + 0.5, y + 0.5);
+      // Camera to world: the rotation's transpose (row vectors).
+      const Imath::V3d d{c.x * m[0][0] + c.y * m[0][1] + c.z * m[0][2],
+                         c.x * m[1][0] + c.y * m[1][1] + c.z * m[1][2],
+                         c.x * m[2][0] + c.y * m[2][1] + c.z * m[2][2]};
+      const WallHit w = walls(d);
+      const bool latlong = camera.projection == Projection::kLatLong;
+      g.depth.at(0, x, y) = static_cast<float>(latlong ? w.t : w.t * c.z);
+      for (int k = 0; k < 3; ++k) {
+        g.normal.at(k, x, y) =
+            static_cast<float>(w.normal.x * m[0][k] + w.normal.y * m[1][k] + w.normal.z * m[2][k]);
+        g.direct.at(k, x, y) = w.reflected;
+      }
+    }
+  return g;
+}
+
+// The six 90-degree faces of a cube at the origin, `size` pixels square.
+std::vector<GBuffer> cube_faces(int size) {
+  const Imath::V3d forward[6] = {{0, 0, 1},  {0, 0, -1}, {1, 0, 0},
+                                 {-1, 0, 0}, {0, 1, 0},  {0, -1, 0}};
+  const Imath::V3d up[6] = {{0, 1, 0}, {0, 1, 0}, {0, 1, 0}, {0, 1, 0}, {0, 0, -1}, {0, 0, 1}};
+  std::vector<GBuffer> faces;
+  for (int f = 0; f < 6; ++f) {
+    Camera c = camera_from_fov(90.0, Box2i{0, 0, size, size});
+    c.world_to_camera = world_to_camera(up[f].cross(forward[f]), up[f], forward[f]);
+    c.has_world_transform = true;
+    faces.push_back(render(c, size, size));
+  }
+  return faces;
+}
+
+GiSettings view_settings() {
+  GiSettings s = converged_settings();
+  s.tracer = Tracer::kSlices;
+  s.bounces = 1;
+  s.miss = MissMode::kEnvironment;  // black: what no ray finds is 0
+  return s;
+}
+
+// The frame: the front wall from a 60-degree camera at the origin (camera space is world space).
+struct Shot {
+  Frame f;
+  explicit Shot(const GiSettings& s) : f(blank_scene(s, 60.0, static_cast<float>(kFront))) {
+    GBuffer& g = f.g;
+    g.camera.has_world_transform = true;
+    for (int y = 0; y < g.height(); ++y)
+      for (int x = 0; x < g.width(); ++x) {
+        // The wall z = kFront facing the camera.
+        g.normal.at(2, x, y) = -1.0f;
+      }
+  }
+  // The sequence with `projections` as its views (the plan reads only how many and which).
+  SequenceInfo with_views(std::vector<Projection> projections) const {
+    SequenceInfo seq = f.seq;
+    for (Projection p : projections) {
+      ViewInfo v;
+      v.pattern = "analytic";
+      v.projection = p;
+      seq.views.push_back(v);
+    }
+    return seq;
+  }
+};
+
+// The mean indirect light and coverage over the frame's inner half (its edges' rays leave it
+// sideways as well).
+struct Means {
+  double light = 0, coverage = 0;
+};
+Means inner_means(const Image& light, const Image& coverage) {
+  Means m;
+  int n = 0;
+  const int w = light.width(), h = light.height();
+  for (int y = h / 4; y < 3 * h / 4; ++y)
+    for (int x = w / 4; x < 3 * w / 4; ++x) {
+      m.light += light.at(0, x, y);
+      m.coverage += coverage.at(0, x, y);
+      ++n;
+    }
+  m.light /= n;
+  m.coverage /= n;
+  return m;
+}
+
+TEST(Views, LightBehindTheCameraIsFoundInCubeFacesAndALatLong) {
+  const GiSettings s = view_settings();
+  const Shot shot(s);
+  const GBuffer& g = shot.f.g;
+
+  // Without views its light is missing, and coverage says so.
+  const detail::FrameStages alone(shot.f.seq, s);
+  ASSERT_FALSE(alone.plan().views);
+  Image coverage;
+  const Means without = inner_means(alone.indirect_light(g, &coverage), coverage);
+  std::printf("without views: indirect %.4f, coverage %.3f (expected 0, 0)\n", without.light,
+              without.coverage);
+  EXPECT_LT(without.light, 0.01 * kLit);
+  EXPECT_LT(without.coverage, 0.01);
+
+  // With the six faces it is the back wall's light.
+  const detail::FrameStages with(shot.with_views({Projection::kPinhole}), s);
+  ASSERT_TRUE(with.plan().views);
+  const detail::LitViews faces = with.light_views(cube_faces(32), g.frame);
+  ASSERT_EQ(faces.traces.size(), 6u);
+  const Means cube = inner_means(with.indirect_light(g, &coverage, &faces), coverage);
+  std::printf("six faces: indirect %.4f (expected %.4f), coverage %.3f\n", cube.light, kLit,
+              cube.coverage);
+  EXPECT_NEAR(cube.light / kLit, 1.0, 0.10);
+  EXPECT_GT(cube.coverage, 0.95);
+
+  // A lat-long panorama at the camera, turned into six faces, finds it as well.
+  Camera ll = latlong_camera(Imath::M44d(), Box2i{0, 0, 256, 128}, "analytic");
+  // latlong_camera flips a -z-forward header to +z forward; the analytic one is +z forward.
+  ll.world_to_camera = Imath::M44d();
+  const detail::FrameStages with_ll(shot.with_views({Projection::kLatLong}), s);
+  const detail::LitViews from_ll =
+      with_ll.light_views(detail::latlong_faces(render(ll, 256, 128)), g.frame);
+  const Means pano = inner_means(with_ll.indirect_light(g, &coverage, &from_ll), coverage);
+  std::printf("lat-long: indirect %.4f (expected %.4f), coverage %.3f\n", pano.light, kLit,
+              pano.coverage);
+  EXPECT_NEAR(pano.light / kLit, 1.0, 0.10);
+  EXPECT_GT(pano.coverage, 0.95);
+  EXPECT_NEAR(std::fabs(pano.light - kLit), std::fabs(cube.light - kLit), 0.1 * kLit);
+}
+
+// A lat-long's faces are the faces rendered directly, to a pixel's worth of the panorama.
+TEST(Views, LatLongFacesAreTheCubeFacesOfItsCamera) {
+  Camera ll = latlong_camera(Imath::M44d(), Box2i{0, 0, 1024, 512}, "analytic");
+  ll.world_to_camera = Imath::M44d();
+  const std::vector<GBuffer> from_ll = detail::latlong_faces(render(ll, 1024, 512), 64);
+  const std::vector<GBuffer> direct = cube_faces(64);
+  ASSERT_EQ(from_ll.size(), 6u);
+  for (int f = 0; f < 6; ++f) {
+    const GBuffer &a = from_ll[f], &b = direct[f];
+    ASSERT_EQ(a.width(), 64);
+    int compared = 0, unlike = 0;
+    for (int y = 0; y < 64; ++y)
+      for (int x = 0; x < 64; ++x) {
+        const float za = a.depth.at(0, x, y), zb = b.depth.at(0, x, y);
+        // At the walls' horizon a pixel's nearest panorama pixel may look just past it.
+        if (std::isfinite(za) != std::isfinite(zb) || !(zb < 4 * kFront)) {
+          unlike += std::isfinite(za) != std::isfinite(zb);
+          continue;
+        }
+        // A lat-long pixel is 0.35 degrees: the depth within a few percent where the walls are
+        // seen at a grazing angle.
+        EXPECT_NEAR(za / zb, 1.0, 0.05) << "face " << f << " " << x << "," << y;
+        for (int k = 0; k < 3; ++k)
+          EXPECT_NEAR(a.normal.at(k, x, y), b.normal.at(k, x, y), 1e-5) << "face " << f;
+        EXPECT_EQ(a.direct.at(0, x, y), b.direct.at(0, x, y)) << "face " << f;
+        ++compared;
+      }
+    EXPECT_GT(compared, 64 * 64 / 2) << "face " << f;
+    EXPECT_LE(unlike, 2 * 64) << "face " << f;
+    for (int i = 0; i < 4; ++i)
+      for (int j = 0; j < 4; ++j)
+        EXPECT_NEAR(a.camera.world_to_camera[i][j], b.camera.world_to_camera[i][j], 1e-12)
+            << "face " << f;
+  }
+}
+
+}  // namespace
+}  // namespace ssgi::pipeline_test
