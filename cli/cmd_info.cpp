@@ -1,4 +1,6 @@
 // ssgi info: what a sequence holds and what `ssgi run` would do with it.
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -37,6 +39,25 @@ std::string window_string(const ssgi::Box2i& b) {
          std::to_string(b.x1 - 1) + "," + std::to_string(b.y1 - 1) + ")";
 }
 
+// A camera's position and forward direction in world space.
+void camera_pose(const ssgi::Camera& c, Imath::V3d* position, Imath::V3d* direction) {
+  const Imath::M44d to_world = ssgi::inverse_checked(c.world_to_camera);
+  *position = {to_world[3][0], to_world[3][1], to_world[3][2]};
+  *direction = Imath::V3d(to_world[2][0], to_world[2][1], to_world[2][2]).normalized();
+}
+
+const char* projection_name(ssgi::Projection p) {
+  return p == ssgi::Projection::kLatLong ? "lat-long" : "pinhole";
+}
+
+std::string vector_text(const Imath::V3d& v) {
+  // Float matrices leave values like 1e-17 where a component is 0.
+  const auto clean = [](double x) { return std::fabs(x) < 1e-9 ? 0.0 : x; };
+  char text[96];
+  std::snprintf(text, sizeof text, "(%.4g, %.4g, %.4g)", clean(v.x), clean(v.y), clean(v.z));
+  return text;
+}
+
 // What `info` found, gathered once and printed as text or JSON.
 struct Report {
   std::vector<std::string> role_channels[ssgi::kRoleCount];  // "part:name" in multi-part files
@@ -46,6 +67,17 @@ struct Report {
     std::string error;
   };
   std::vector<FrameCamera> cameras;
+  // Each view (--view, --latlong-view) as the first frame reads it.
+  struct View {
+    std::string file;
+    const ssgi::ViewInfo* info = nullptr;
+    std::optional<ssgi::Camera> camera;
+    std::string error;
+    Imath::V3d position{0, 0, 0}, direction{0, 0, 0};
+    double from_shot = 0;  // distance of its camera from the shot's (world units)
+    bool at_shot = false;  // at the shot camera's position (to float precision)
+  };
+  std::vector<View> views;
   // The first frame's normal pass and the space it is read in (GBuffer::normals_source); empty
   // when the normals come from the depth or the frame could not be read.
   std::string normals;
@@ -108,6 +140,31 @@ Json check_json(const Report& r) {
           {"environment", r.environment_error.empty() ? Json("ok") : Json(r.environment_error)}};
 }
 
+Json views_json(const ssgi::SequenceInfo& seq, const Report& r) {
+  Json out = Json::array();
+  for (const Report::View& v : r.views) {
+    const ssgi::SequenceInfo& vs = *v.info->sequence;
+    Json view = {{"file", v.file},
+                 {"pattern", v.info->pattern},
+                 {"still", v.info->still},
+                 {"resolution", {vs.display_window.width(), vs.display_window.height()}},
+                 {"projection", projection_name(v.info->projection)}};
+    if (v.camera) {
+      view["camera"] = {{"frame", seq.frames.front()},
+                        {"source", v.camera->source},
+                        {"position", {v.position.x, v.position.y, v.position.z}},
+                        {"direction", {v.direction.x, v.direction.y, v.direction.z}},
+                        {"hfov_deg", v.camera->hfov_deg(vs.display_window.width())}};
+      view["distance_from_shot_camera"] = v.from_shot;
+      view["at_shot_camera"] = v.at_shot;
+    } else {
+      view["error"] = v.error;
+    }
+    out.push_back(std::move(view));
+  }
+  return out;
+}
+
 void print_json(const ssgi::InputOptions& in, const ssgi::SequenceInfo& seq, const Report& r) {
   const ssgi::LayoutPreset& preset = seq.layout.preset;
   Json channels = Json::object();
@@ -146,6 +203,7 @@ void print_json(const ssgi::InputOptions& in, const ssgi::SequenceInfo& seq, con
         {"direct_includes_albedo", preset.direct_includes_albedo},
         {"channels", channels}}},
       {"cameras", cameras},
+      {"views", views_json(seq, r)},
       {"normals", r.normals.empty() ? Json(nullptr)
                                     : Json({{"frame", seq.frames.front()}, {"source", r.normals}})},
       {"preset", r.preset},
@@ -220,6 +278,29 @@ void print_text(const ssgi::InputOptions& in, const ssgi::SequenceInfo& seq, con
                   c.camera->hfov_deg(seq.display_window.width()));
     else
       std::printf("  frame %-6d none: %s\n", c.frame, c.error.c_str());
+  }
+  if (!r.views.empty()) std::printf("views (frame %d):\n", seq.frames.front());
+  for (const Report::View& v : r.views) {
+    const ssgi::SequenceInfo& vs = *v.info->sequence;
+    const int w = vs.display_window.width(), h = vs.display_window.height();
+    std::printf("  %s%s: %dx%d %s", v.file.c_str(), v.info->still ? " (still)" : "", w, h,
+                projection_name(v.info->projection));
+    if (v.info->projection == ssgi::Projection::kLatLong)
+      std::printf(" (six cube faces of %d)", std::max(8, (w + 2) / 4));
+    if (!v.camera) {
+      std::printf(", no camera: %s\n", v.error.c_str());
+      continue;
+    }
+    std::printf("\n    camera %s at %s looking along %s, horizontal fov %.4f deg\n",
+                v.camera->source.c_str(), vector_text(v.position).c_str(),
+                vector_text(v.direction).c_str(), v.camera->hfov_deg(w));
+    if (v.at_shot)
+      std::printf("    at the shot camera's position\n");
+    else
+      std::printf(
+          "    %.4g from the shot camera's position: rays continue in it all the same, "
+          "parallax-correct\n",
+          v.from_shot);
   }
   if (!r.normals.empty())
     std::printf("normals:       frame %d: %s\n", seq.frames.front(), r.normals.c_str());
@@ -306,6 +387,31 @@ int run_info(int argc, char** argv) {
       r.cameras.push_back({f, std::nullopt, e.what()});
       if (!r.problem) r.problem = e;
     }
+  }
+  for (const ssgi::ViewInfo& view : seq.views) {
+    Report::View v;
+    v.info = &view;
+    v.file = view.path_for(seq.frames.front());
+    ssgi::InputOptions o = in;
+    o.camera = ssgi::CameraOptions();
+    o.camera.projection = view.projection;
+    try {
+      v.camera = ssgi::read_camera(*view.sequence, view.sequence->frames.front(), o);
+      camera_pose(*v.camera, &v.position, &v.direction);
+      if (!r.cameras.empty() && r.cameras.front().camera &&
+          r.cameras.front().camera->has_world_transform) {
+        Imath::V3d shot_position, shot_direction;
+        camera_pose(*r.cameras.front().camera, &shot_position, &shot_direction);
+        v.from_shot = (v.position - shot_position).length();
+        // Matrices written as floats: positions agree to a few parts in 1e7 of their size.
+        v.at_shot =
+            v.from_shot <= 1e-5 * std::max({1.0, shot_position.length(), v.position.length()});
+      }
+    } catch (const ssgi::Error& e) {
+      v.error = e.what();
+      if (!r.problem) r.problem = e;
+    }
+    r.views.push_back(std::move(v));
   }
   if (seq.layout.has(ssgi::Role::kNormal) && !seq.normals_from_depth && !r.cameras.empty() &&
       r.cameras.front().camera) {

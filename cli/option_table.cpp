@@ -61,6 +61,13 @@ const std::vector<OptionSpec> kTable = {
      "per-frame cameras from a sidecar file", nullptr},
     {kContext, "context", 0, "PATTERN", OptionGroup::kInput, kRunCommand | kInfoCommand,
      "a region render's whole frames: rays leaving the data window meet what they show", nullptr},
+    {kView, "view", 0, "PATTERN", OptionGroup::kInput, kRunCommand | kInfoCommand | kSweepCommand,
+     "an extra view of the scene (repeatable): a pinhole render with its own camera, e.g. a cube "
+     "face, as a sequence (####) or a still; missed rays continue in it",
+     nullptr},
+    {kLatLongView, "latlong-view", 0, "PATTERN", OptionGroup::kInput,
+     kRunCommand | kInfoCommand | kSweepCommand,
+     "the same for a lat-long (equirectangular) panorama, camera from worldToCamera", nullptr},
     // gi
     {kPreset, "preset", 0, "P", OptionGroup::kGi, kTracing,
      "draft, default or final: the tracing settings below (man ssgi-gi, PRESETS); options given "
@@ -168,7 +175,7 @@ const std::vector<OptionSpec> kTable = {
      "the preview's OCIO display (default: the config's default display; sRGB without a "
      "config)",
      nullptr},
-    {kView, "view", 0, "NAME", OptionGroup::kColor, kRunCommand | kPreviewCommand,
+    {kDisplayView, "display-view", 0, "NAME", OptionGroup::kColor, kRunCommand | kPreviewCommand,
      "the preview's view of that display (default: the display's default view)", nullptr},
     // output
     {kPreview, "preview", 0, "PATTERN", OptionGroup::kOutput, kRunCommand,

@@ -165,6 +165,16 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
         if (*a == '\0') ssgi::throw_usage("--context: empty pattern");
         in.context = a;
         break;
+      case kView:
+      case kLatLongView: {
+        if (*a == '\0')
+          ssgi::throw_usage(std::string("option '") + written_name(id) + "' needs a file pattern");
+        ssgi::ViewOptions v;
+        v.pattern = a;
+        v.projection = id == kLatLongView ? ssgi::Projection::kLatLong : ssgi::Projection::kPinhole;
+        in.views.push_back(v);
+        break;
+      }
       case kRays:
         gi.rays = static_cast<int>(parse_long("rays", a, 1, 4096));
         break;
@@ -356,7 +366,7 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
       case kEnvColorspace:
       case kWorkingSpace:
       case kDisplay:
-      case kView: {
+      case kDisplayView: {
         ssgi::ColorSettings& c = gi.color;
         std::string* field = id == kColorConfig        ? &c.config
                              : id == kInputColorspace  ? &c.input

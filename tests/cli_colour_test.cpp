@@ -332,7 +332,7 @@ TEST_F(Cli, PreviewGoesThroughTheConfigsDisplayAndView) {
   };
   const OIIO::ImageBuf plain = preview("plain", {});
   const OIIO::ImageBuf standard = preview("standard", {"--colorconfig", kOcioConfig});
-  const OIIO::ImageBuf raw = preview("raw", {"--colorconfig", kOcioConfig, "--view", "Raw"});
+  const OIIO::ImageBuf raw = preview("raw", {"--colorconfig", kOcioConfig, "--display-view", "Raw"});
   // The config's sRGB / Standard view is the sRGB curve: the built-in one's picture, to the
   // 8-bit step where float rounding crosses one.
   const auto standard_diff = OIIO::ImageBufAlgo::compare(standard, plain, 1.01 / 255, 0);
@@ -355,7 +355,7 @@ TEST_F(Cli, PreviewGoesThroughTheConfigsDisplayAndView) {
   EXPECT_LT(stats_raw.avg[1], 0.8 * stats_plain.avg[1]);
   const CliResult bad =
       run_ssgi({"run", in, "-o", path("x.0001.exr"), "--preview", path("x.0001.png"),
-                "--colorconfig", kOcioConfig, "--view", "Filmic"});
+                "--colorconfig", kOcioConfig, "--display-view", "Filmic"});
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("has no view 'Filmic'"), std::string::npos) << bad.err;
   EXPECT_FALSE(fs::exists(path("x.0001.exr")));
