@@ -159,6 +159,10 @@ Image FrameStages::denoise_on_grid(const GBuffer& g, Image light) const {
                               level);
 }
 
+// Passes of bounces among a frame's views (light_views): each brings one more bounce from the
+// other views' light.
+constexpr int kViewPasses = 3;
+
 LitViews FrameStages::light_views(const std::vector<GBuffer>& views, int frame) const {
   LitViews out;
   if (!plan_.views) return out;
@@ -171,25 +175,34 @@ LitViews FrameStages::light_views(const std::vector<GBuffer>& views, int frame) 
     out.traces.push_back(std::move(t));
   }
   // Light bounces among the views: each one's missed rays continued in the others, which bring
-  // their light of the pass before (one more bounce for each of their own).
-  if (out.traces.size() < 2) return out;
-  std::vector<Image> again(out.traces.size());
-  for (std::size_t i = 0; i < out.traces.size(); ++i) {
-    std::vector<const FrameTrace*> others;
-    std::vector<const Image*> lights;
-    for (std::size_t j = 0; j < out.traces.size(); ++j) {
-      if (j == i) continue;
-      others.push_back(out.traces[j].get());
-      lights.push_back(&out.light[j]);
+  // their light of the pass before, one more bounce among them each pass (the hits found once).
+  const std::size_t n = out.traces.size();
+  if (n < 2) return out;
+  std::vector<ViewHits> found(n);
+  std::vector<std::vector<const FrameTrace*>> others(n);
+  std::vector<char> continued(n, 0);
+  const int passes = std::min(kViewPasses, std::max(1, settings_.bounces - 1));
+  for (int pass = 0; pass < passes; ++pass) {
+    std::vector<Image> again(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      std::vector<const Image*> lights;
+      for (std::size_t j = 0; j < n; ++j) {
+        if (j == i) continue;
+        if (pass == 0) others[i].push_back(out.traces[j].get());
+        lights.push_back(&out.light[j]);
+      }
+      FrameTrace& t = *out.traces[i];
+      if (pass == 0)
+        continued[i] = continue_in_views(&t, others[i], lights, settings_, nullptr, &found[i]);
+      else if (continued[i])
+        t.hits.foreign = view_light(t, found[i], others[i], lights, settings_);
+      again[i] = continued[i]
+                     ? denoise_on_grid(views[i],
+                                       gather_bounces(t.grid, t.hits, settings_.bounces, t.misses))
+                     : out.light[i];
     }
-    FrameTrace& t = *out.traces[i];
-    if (continue_in_views(&t, others, lights, settings_, nullptr))
-      again[i] =
-          denoise_on_grid(views[i], gather_bounces(t.grid, t.hits, settings_.bounces, t.misses));
-    else
-      again[i] = out.light[i];
+    out.light = std::move(again);
   }
-  out.light = std::move(again);
   return out;
 }
 

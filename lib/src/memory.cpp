@@ -247,6 +247,28 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
     multiframe =
         ring_frames * (planes(12, grid) + grid * (5 + 24)) + unfinished * own + planes(13, grid);
   }
+  // Views (--view): while a frame is lit, its views' G-buffers (13 planes) and each view's
+  // trace (its grid, 11 planes; its hits and missed rays, as a frame's own; its mesh and the light
+  // its hits bring, 29 bytes a sample, and its light, 3 planes) at the plan's trace scale; the
+  // frame's own missed rays, kept for them, as multiframe's; and the views read ahead for the
+  // frames in flight. A lat-long is six faces a quarter of its width square.
+  std::uint64_t views = 0;
+  if (plan.views) {
+    std::uint64_t view_pixels = 0;
+    for (const ViewInfo& v : seq.views) {
+      const std::uint64_t vw = v.sequence->data_window.width(),
+                          vh = v.sequence->data_window.height();
+      const std::uint64_t face = std::max<std::uint64_t>(8, (vw + 2) / 4);
+      view_pixels += v.projection == Projection::kLatLong ? 6 * face * face : vw * vh;
+    }
+    const std::uint64_t view_grid = view_pixels / (static_cast<std::uint64_t>(scale) * scale) + 1;
+    const std::uint64_t missed = static_cast<std::uint64_t>(s.slices) * 8 * 16 + 16;
+    const std::uint64_t read_views = planes(13, view_pixels);
+    const std::uint64_t lit_views =
+        planes(14, view_grid) + view_grid * (s.slices * 32 * 8 + 20 + missed + 29);
+    views = std::clamp(memory.frames_in_flight, 1, 3) * read_views + lit_views +
+            (plan.multiframe > 0 ? 0 : grid * missed);
+  }
   // The denoiser's pyramid and guides at full resolution when the light enters it there; from
   // a coarser trace grid, only the depths whole, the coarser levels (a third of a plane per
   // plane of the half-resolution level's 6 guides and light) and the light upsampled (the
@@ -270,7 +292,7 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
   // since it was lit), else as read.
   const std::uint64_t finishing_passes =
       planes(plan.temporal == TemporalMode::kWindow ? read - motion : read, pixels);
-  const std::uint64_t lighting = frame + tracing;
+  const std::uint64_t lighting = frame + tracing + views;
   const std::uint64_t finishing = finishing_passes + denoise + composite;
   // With a callback or the preview the passes stay until the frame is written.
   const std::uint64_t writing =
@@ -296,8 +318,9 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
       (read_twice ? std::string("read twice") : std::to_string(waiting) + " waiting") + ")" +
       (multiframe ? ", multiframe " + memory_size_text(multiframe) : std::string()) + ", lit " +
       memory_size_text(lighting) + " (read " + memory_size_text(frame) + ", tracing " +
-      memory_size_text(tracing) + "), finished " + memory_size_text(finishing) + ", written " +
-      memory_size_text(writing) + ", " +
+      memory_size_text(tracing) + (views ? ", views " + memory_size_text(views) : std::string()) +
+      "), finished " + memory_size_text(finishing) + ", written " + memory_size_text(writing) +
+      ", " +
       (in_flight > 1 ? std::to_string(in_flight - 1) + " more frame" + (in_flight > 2 ? "s" : "") +
                            " in flight " + memory_size_text(overlap) + ", "
                      : std::string()) +

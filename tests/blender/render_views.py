@@ -29,25 +29,29 @@ its +y. The shot camera's scale is ignored (Cycles ignores it too).
 
 Rendering: Cycles CPU, --samples per pixel (default 16), no adaptive sampling, no denoising, no
 motion blur, a 0.01-pixel filter (every sample at the pixel centre, so the data passes are the
-exact values there, as tests/blender/render_gbuffer.py renders), no light bounces (max bounces 0:
-the passes below are the surface and its direct light, which do not depend on bounces), no
-compositing; multilayer 32-bit float ZIP EXR with, on every view layer the .blend renders, the
-passes ssgi reads and nothing else: Depth, Normal, Position, DiffCol, DiffDir, Emit. Depth is
-Cycles': planar camera z on a face, the distance along the pixel's ray on the lat-long.
+exact values there, as tests/blender/render_gbuffer.py renders), no compositing, max bounces 0
+(the passes below are the first surface and its direct light: they come out identical to a
+render at Blender's default bounces, in half the time); multilayer 32-bit float ZIP EXR with,
+on every view layer the .blend renders, the passes ssgi reads: Depth, Normal, Position, DiffCol,
+DiffDir, Emit (and Combined, which Blender always writes; every other built-in pass is turned
+off, shader AOVs and light groups the .blend defines are kept).
+Depth is Cycles': planar camera z on a face, the distance along the pixel's ray on the lat-long.
 The .blend is not saved.
 
-Cameras in the headers: stock Blender writes none, so after each render the file's header gets
-the OpenEXR standard attributes with oiiotool, as tests/accuracy/training/render.sh adds them
-(Imath row-vector matrices, p' = p * M, translation in the last row):
-  faces:   worldToCamera (x right, y up, +z forward) and worldToNDC ((0,0) top-left, (1,1)
-           bottom-right after the divide by w), from the face camera's matrix_world and Blender's
-           projection by ../accuracy/training/camera_matrices.py, as for a shot frame;
+Cameras in the headers: stock Blender writes none. Each view renders to a hidden file
+DIR/.NAME.<view>.####.exr; once a frame's views are rendered, oiiotool writes them to their
+names with the OpenEXR standard attributes added, as tests/accuracy/training/render.sh adds them
+(Imath row-vector matrices, p' = p * M, translation in the last row), and the hidden files go:
+  faces:    worldToCamera (x right, y up, +z forward) and worldToNDC ((0,0) top-left, (1,1)
+            bottom-right after the divide by w), from the face camera's matrix_world and
+            Blender's projection by ../accuracy/training/camera_matrices.py, as for a shot frame;
   lat-long: worldToCamera only: the inverse of the panorama camera's matrix_world in Blender's
-           own camera space (x right, y up, looking along -z; not flipped), as ssgi reads a
-           lat-long view's camera. A pixel centre (u + 0.5, v + 0.5) of a W x H map, v = 0 the
-           top row, looks along longitude phi = ((u + 0.5) / W - 0.5) * 2 pi and latitude
-           theta = (0.5 - (v + 0.5) / H) * pi, i.e. along (cos theta sin phi, sin theta,
-           -cos theta cos phi) in that camera space.
+            own camera space (x right, y up, looking along -z; not flipped), as ssgi reads a
+            lat-long view's camera. The pixel centre (u + 0.5, v + 0.5) of the W x H map, v = 0
+            the top row, looks along longitude phi = ((u + 0.5) / W - 0.5) * 2 pi and latitude
+            theta = (0.5 - (v + 0.5) / H) * pi, i.e. along (cos theta sin phi, sin theta,
+            -cos theta cos phi) in that camera space: the centre forward, a quarter across
+            left (-x), three quarters across right (+x), the left and right edges backward.
 DIR/NAME.views.json holds the same matrices per frame and view, with Blender's camera-to-world
 and projection matrices they come from.
 """
@@ -137,7 +141,9 @@ def render_settings(scene, samples):
     scene.cycles.film_filter_width = 0.01
     scene.cycles.max_bounces = 0
     scene.render.use_motion_blur = False
-    scene.render.use_persistent_data = True  # the scene is synced once, not per view
+    # Cycles keeps the synced scene from one view to the next (the same pixels; heavy scenes
+    # skip rebuilding their BVH per view).
+    scene.render.use_persistent_data = True
     scene.render.use_compositing = False
     scene.render.use_sequencer = False
     scene.render.use_border = False
@@ -201,23 +207,36 @@ def add_view_cameras(scene):
     return face, pano
 
 
-def add_header(path, world_to_camera, world_to_ndc):
-    """The OpenEXR camera attributes into path's header, as render.sh adds them."""
-    args = ["oiiotool", "--nosoftwareattrib", path, "--attrib:type=matrix", "worldToCamera",
-            ",".join(repr(v) for v in world_to_camera)]
-    if world_to_ndc is not None:
-        args += ["--attrib:type=matrix", "worldToNDC", ",".join(repr(v) for v in world_to_ndc)]
-    subprocess.run(args + ["-o", path + ".tmp.exr"], check=True)
-    os.replace(path + ".tmp.exr", path)
+def add_headers(views):
+    """views: (rendered, path, worldToCamera, worldToNDC or None). Writes each rendered file
+    to path with the OpenEXR camera attributes in its header, as render.sh adds them (one
+    oiiotool run for all: its start-up costs more than a small file), and removes it."""
+    args = ["oiiotool", "--nosoftwareattrib"]
+    for rendered, path, world_to_camera, world_to_ndc in views:
+        args += [rendered, "--attrib:type=matrix", "worldToCamera",
+                 ",".join(repr(v) for v in world_to_camera)]
+        if world_to_ndc is not None:
+            args += ["--attrib:type=matrix", "worldToNDC",
+                     ",".join(repr(v) for v in world_to_ndc)]
+        args += ["-o", path]
+    subprocess.run(args, check=True)
+    for rendered, *_ in views:
+        os.remove(rendered)
 
 
 def render_view(scene, cam, size, path):
+    """Renders cam's view to a hidden file beside path (path itself is written with the
+    camera in its header) and returns that file's name."""
+    rendered = os.path.join(os.path.dirname(path), "." + os.path.basename(path))
+    if os.path.exists(rendered):
+        os.remove(rendered)  # left by an interrupted run
     scene.camera = cam
     scene.render.resolution_x, scene.render.resolution_y = size
-    scene.render.filepath = path
+    scene.render.filepath = rendered
     bpy.ops.render.render(write_still=True)
-    if not os.path.isfile(path):
-        fail(f"Blender wrote no {path}")
+    if not os.path.isfile(rendered):
+        fail(f"Blender wrote no {rendered}")
+    return rendered
 
 
 def main():
@@ -232,10 +251,10 @@ def main():
     if last < first:
         fail(f"empty frame range {first}-{last}")
     frames = range(first, last + 1)
+    shots = shot_cameras(scene, opts["camera"], frames)
+    render_settings(scene, opts["samples"])
     out_dir = os.path.abspath(opts["out"])
     os.makedirs(out_dir, exist_ok=True)
-    render_settings(scene, opts["samples"])
-    shots = shot_cameras(scene, opts["camera"], frames)
     face_cam, pano_cam = add_view_cameras(scene)
     n = opts["face_size"]
     latlong_size = (opts["latlong_width"], opts["latlong_width"] // 2)
@@ -250,6 +269,7 @@ def main():
         shot_to_world = rigid(shot.matrix_world)
         entry = {"frame": f, "camera": shots[f].name,
                  "clip": [shot.data.clip_start, shot.data.clip_end], "views": {}}
+        views = []
         for data in (face_cam.data, pano_cam.data):
             data.clip_start, data.clip_end = shot.data.clip_start, shot.data.clip_end
         if opts["faces"]:
@@ -264,8 +284,7 @@ def main():
                 w2c = camera_matrices.world_to_camera(c2w)
                 ndc = camera_matrices.world_to_ndc(c2w, proj)
                 path = os.path.join(out_dir, f"{name}.{face}.{f:04d}.exr")
-                render_view(scene, face_cam, (n, n), path)
-                add_header(path, w2c, ndc)
+                views.append((render_view(scene, face_cam, (n, n), path), path, w2c, ndc))
                 entry["views"][face] = {"camera_to_world_gl": c2w, "projection_gl": proj,
                                         "worldToCamera": w2c, "worldToNDC": ndc}
         if opts["latlong"]:
@@ -275,9 +294,9 @@ def main():
             # Blender's camera space (looking along -z), not flipped as a pinhole's is.
             w2c = camera_matrices.flat_row_vector(camera_matrices.rigid_inverse(c2w))
             path = os.path.join(out_dir, f"{name}.latlong.{f:04d}.exr")
-            render_view(scene, pano_cam, latlong_size, path)
-            add_header(path, w2c, None)
+            views.append((render_view(scene, pano_cam, latlong_size, path), path, w2c, None))
             entry["views"]["latlong"] = {"camera_to_world_gl": c2w, "worldToCamera": w2c}
+        add_headers(views)
         record["frames"].append(entry)
         with open(json_path, "w") as out:
             json.dump(record, out, indent=1)

@@ -62,6 +62,24 @@ float ray_jitter(std::size_t sample, std::size_t ray, int frame, std::uint32_t s
 // albedo x the indirect light the frame gathered itself, after all its bounces (so a continued
 // ray brings a bounce more than the frame's own last hits, but for --bounces 1, where it
 // brings what the surface reflects alone, and nothing from its back).
+// The light a hit on each trace sample of `t` brings (front at 2 s, unseen back at 2 s + 1):
+// what it reflects plus its albedo x `own_light`, the indirect light it gathered itself.
+std::vector<std::array<float, 3>> hit_light(const FrameTrace& t, const Image& own_light) {
+  const TraceGrid& g = t.grid;
+  std::vector<std::array<float, 3>> light(2 * g.origin.size());
+  parallel_for_rows(g.height, [&](int by) {
+    for (int bx = 0; bx < g.width; ++bx) {
+      const std::size_t s = static_cast<std::size_t>(by) * g.width + bx;
+      for (int c = 0; c < 3; ++c) {
+        const float back = g.origin[s] < 0 ? 0.0f : g.albedo.plane(c)[s] * own_light.plane(c)[s];
+        light[2 * s][c] = g.reflected.plane(c)[s] + back;
+        light[2 * s + 1][c] = back;
+      }
+    }
+  });
+  return light;
+}
+
 struct View {
   const FrameTrace* trace;
   DepthMesh mesh;
@@ -70,22 +88,10 @@ struct View {
   // `own_light` null: the light of one bounce (what the surfaces reflect, their backs nothing).
   // A view's (`grazing`) mesh also joins neighbours on one plane seen at a grazing angle.
   View(const FrameTrace& t, const Image* own_light, bool grazing = false)
-      : trace(&t),
-        mesh(t.grid.depth, t.grid.thickness),
-        light(own_light ? 2 * t.grid.origin.size() : 0) {
+      : trace(&t), mesh(t.grid.depth, t.grid.thickness) {
     const TraceGrid& g = t.grid;
     if (grazing) mesh.join_tangent_neighbours(g.depth, g.normal, g.fx, g.fy, g.cx, g.cy);
-    if (light.empty()) return;
-    parallel_for_rows(g.height, [&](int by) {
-      for (int bx = 0; bx < g.width; ++bx) {
-        const std::size_t s = static_cast<std::size_t>(by) * g.width + bx;
-        for (int c = 0; c < 3; ++c) {
-          const float back = g.origin[s] < 0 ? 0.0f : g.albedo.plane(c)[s] * own_light->plane(c)[s];
-          light[2 * s][c] = g.reflected.plane(c)[s] + back;
-          light[2 * s + 1][c] = back;
-        }
-      }
-    });
+    if (own_light) light = hit_light(t, *own_light);
   }
 
   // The camera-space point of trace sample s's vertex.
@@ -98,9 +104,25 @@ struct View {
   }
 };
 
+// Adds to `sum` what a ray of `weight` brings from marked hit `hit` on `t`: with its light
+// table (hit_light), the front's or the back's light; without (one bounce), what the front
+// reflects.
+void add_hit_light(const FrameTrace& t, const std::vector<std::array<float, 3>>& light,
+                   std::int32_t hit, float weight, float sum[3]) {
+  const std::int32_t h = hit_pixel(hit);
+  if (light.empty()) {
+    if (hit == h)
+      for (int c = 0; c < 3; ++c) sum[c] += weight * t.grid.reflected.plane(c)[h];
+  } else {
+    const std::array<float, 3>& l = light[2 * static_cast<std::size_t>(h) + (hit == h ? 0 : 1)];
+    for (int c = 0; c < 3; ++c) sum[c] += weight * l[c];
+  }
+}
+
 struct Neighbour {
   const View* view;
   Rigid from_center, to_center;
+  std::uint32_t index = 0;  // continue_in_views: the view's index among those given
 };
 
 // Where ray (o, d) (camera space, o inside the view) leaves the view of trace grid `g` (its
@@ -271,7 +293,7 @@ std::string ViewsReport::describe(int frame) const {
 
 bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrace*>& views,
                        const std::vector<const Image*>& light, const GiSettings& settings,
-                       ViewsReport* report) {
+                       ViewsReport* report, ViewHits* found_rays) {
   FrameTrace& self = *self_trace;
   ViewsReport local;
   ViewsReport& r = report ? *report : local;
@@ -285,7 +307,7 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
     if (!views[i]->camera.has_world_transform) continue;
     all.emplace_back(*views[i], settings.bounces > 1 ? light[i] : nullptr, true);
     neighbours.push_back({&all.back(), between(self.camera, views[i]->camera),
-                          between(views[i]->camera, self.camera)});
+                          between(views[i]->camera, self.camera), static_cast<std::uint32_t>(i)});
   }
   r.views = static_cast<int>(neighbours.size());
   if (neighbours.empty() || self.missed.rays.empty()) return false;
@@ -296,6 +318,9 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
   // The rays still missed, row by row, for the shot's other frames to continue (multiframe).
   std::vector<std::vector<MissedRay>> row_left(static_cast<std::size_t>(grid.height));
   std::vector<std::uint32_t> left_count(grid.origin.size(), 0);
+  // The found rays, row by row, when asked for.
+  std::vector<std::vector<ViewHit>> found_by_row(found_rays ? grid.height : 0);
+  std::vector<std::uint32_t> found_count(found_rays ? grid.origin.size() : 0, 0);
   std::atomic<std::size_t> rays{0}, found{0}, refused{0};
   parallel_for_rows(grid.height, [&](int by) {
     std::size_t row_rays = 0, row_found = 0, row_refused = 0;
@@ -341,15 +366,10 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
           ++left_count[s];
           continue;
         }
-        const std::int32_t h = hit_pixel(best_hit);
-        if (best->view->light.empty()) {  // one bounce: what the surface reflects, if its front
-          if (best_hit == h)
-            for (int c = 0; c < 3; ++c)
-              sum[c] += ray.weight * best->view->trace->grid.reflected.plane(c)[h];
-        } else {
-          const std::array<float, 3>& l =
-              best->view->light[2 * static_cast<std::size_t>(h) + (best_hit == h ? 0 : 1)];
-          for (int c = 0; c < 3; ++c) sum[c] += ray.weight * l[c];
+        add_hit_light(*best->view->trace, best->view->light, best_hit, ray.weight, sum);
+        if (found_rays) {
+          found_by_row[by].push_back({best->index, best_hit, ray.weight});
+          ++found_count[s];
         }
         self.misses.add(ray.direction, ray.weight, env_found, cube_found);
         miss_found += ray.weight;
@@ -390,7 +410,49 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
   });
   left.begin.back() = row_start.back();
   self.missed = std::move(left);
+  if (found_rays) {
+    std::vector<std::uint32_t> found_start(static_cast<std::size_t>(grid.height) + 1, 0);
+    for (int by = 0; by < grid.height; ++by)
+      found_start[by + 1] = found_start[by] + static_cast<std::uint32_t>(found_by_row[by].size());
+    ViewHits& out = *found_rays;
+    out.begin.resize(grid.origin.size() + 1);
+    out.hits.resize(found_start.back());
+    parallel_for_rows(grid.height, [&](int by) {
+      std::uint32_t at = found_start[by];
+      for (int bx = 0; bx < grid.width; ++bx) {
+        const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
+        out.begin[s] = at;
+        at += found_count[s];
+      }
+      std::copy(found_by_row[by].begin(), found_by_row[by].end(),
+                out.hits.begin() + found_start[by]);
+    });
+    out.begin.back() = found_start.back();
+  }
   return r.found > 0;
+}
+
+Image view_light(const FrameTrace& self, const ViewHits& found,
+                 const std::vector<const FrameTrace*>& views,
+                 const std::vector<const Image*>& light, const GiSettings& settings) {
+  // Only the views' light tables: the hits are known.
+  std::vector<std::vector<std::array<float, 3>>> tables(views.size());
+  if (settings.bounces > 1)
+    for (std::size_t i = 0; i < views.size(); ++i) tables[i] = hit_light(*views[i], *light[i]);
+  const TraceGrid& grid = self.grid;
+  Image out(grid.width, grid.height, 3);
+  parallel_for_rows(grid.height, [&](int by) {
+    for (int bx = 0; bx < grid.width; ++bx) {
+      const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
+      float sum[3] = {0, 0, 0};
+      for (std::uint32_t k = found.begin[s]; k < found.begin[s + 1]; ++k) {
+        const ViewHit& h = found.hits[k];
+        add_hit_light(*views[h.view], tables[h.view], h.hit, h.weight, sum);
+      }
+      for (int c = 0; c < 3; ++c) out.plane(c)[s] = sum[c];
+    }
+  });
+  return out;
 }
 
 bool continue_rays(const std::vector<const FrameTrace*>& frames,
@@ -463,15 +525,7 @@ bool continue_rays(const std::vector<const FrameTrace*>& frames,
             refused = true;
             continue;
           }
-          if (n.view->light.empty()) {  // one bounce: what the surface reflects, if its front
-            if (hit == h)
-              for (int c = 0; c < 3; ++c)
-                sum[c] += ray.weight * n.view->trace->grid.reflected.plane(c)[h];
-          } else {
-            const std::array<float, 3>& l =
-                n.view->light[2 * static_cast<std::size_t>(h) + (hit == h ? 0 : 1)];
-            for (int c = 0; c < 3; ++c) sum[c] += ray.weight * l[c];
-          }
+          add_hit_light(*n.view->trace, n.view->light, hit, ray.weight, sum);
           self.misses.add(ray.direction, ray.weight, env_found, cube_found);
           miss_found += ray.weight;
           ++row_found;

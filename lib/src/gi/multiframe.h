@@ -96,9 +96,26 @@ struct ViewsReport {
 // grazing angle (DepthMesh::join_tangent_neighbours): a view's few pixels see much of the scene
 // so. True when a ray met a surface; nothing changes without a world transform for the frame's
 // camera.
+// With `found`, also which view sample each found ray met and its weight, for view_light.
+struct ViewHit {
+  std::uint32_t view;  // its index in `views`
+  std::int32_t hit;    // a trace sample of it, kSeenFromBehind marked
+  float weight;        // the ray's share of the hemisphere
+};
+struct ViewHits {
+  std::vector<std::uint32_t> begin;  // per trace sample, its first; one more at the end
+  std::vector<ViewHit> hits;
+};
 bool continue_in_views(FrameTrace* self, const std::vector<const FrameTrace*>& views,
                        const std::vector<const Image*>& light, const GiSettings& settings,
-                       ViewsReport* report);
+                       ViewsReport* report, ViewHits* found = nullptr);
+
+// The light the rays `found` (continue_in_views, on `self`'s trace grid) bring from the same
+// views with their light `light`: what continue_in_views adds to hits.foreign, for the views'
+// light of another pass of bounces among them.
+Image view_light(const FrameTrace& self, const ViewHits& found,
+                 const std::vector<const FrameTrace*>& views,
+                 const std::vector<const Image*>& light, const GiSettings& settings);
 
 // Frame frames[center]'s light on its trace grid with its missed rays continued in the other
 // frames (in ascending frame order, each with its own light on its grid, before any temporal
