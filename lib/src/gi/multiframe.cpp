@@ -144,6 +144,34 @@ float leaves_view(const TraceGrid& g, const Imath::V3f& o, const Imath::V3f& d, 
   return t;
 }
 
+// Where camera-space ray (o, d), from parameter t_from on, enters the view of trace grid `g`
+// (its pyramid of sight beyond kNearFraction x `scale`, up to where march_in ends it): the
+// infinite float when it never does.
+float enters_view(const TraceGrid& g, const Imath::V3f& o, const Imath::V3f& d, float t_from,
+                  float scale, const GiSettings& settings) {
+  const float inf = std::numeric_limits<float>::infinity();
+  float lo = t_from;
+  float hi =
+      settings.max_distance > 0 ? static_cast<float>(settings.max_distance) : kFarFactor * scale;
+  // Each side as a x p + b >= 0 inside the view.
+  auto side = [&](float ax, float ay, float az, float b) {
+    const float at = ax * o.x + ay * o.y + az * o.z + b, slope = ax * d.x + ay * d.y + az * d.z;
+    if (slope > 0)
+      lo = std::max(lo, -at / slope);
+    else if (slope < 0)
+      hi = std::min(hi, at / -slope);
+    else if (at < 0)
+      hi = -inf;
+  };
+  const float w = static_cast<float>(g.width), h = static_cast<float>(g.height);
+  side(g.fx, 0, g.cx, 0);
+  side(-g.fx, 0, w - g.cx, 0);
+  side(0, -g.fy, g.cy, 0);
+  side(0, g.fy, h - g.cy, 0);
+  side(0, 0, 1, -kNearFraction * scale);
+  return lo < hi ? lo : inf;
+}
+
 // Where ray (o, d) of the centre frame, free in its view up to `t_exit` where it leaves the
 // view (leaves_view), first passes behind what the frame shows by more than the slab: the
 // parameter of the last free sample before that point, of `steps` jittered samples evenly spaced
@@ -322,8 +350,14 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
   std::vector<std::vector<ViewHit>> found_by_row(found_rays ? grid.height : 0);
   std::vector<std::uint32_t> found_count(found_rays ? grid.origin.size() : 0, 0);
   std::atomic<std::size_t> rays{0}, found{0}, refused{0};
+  struct Entering {
+    float t;
+    const Neighbour* n;
+  };
   parallel_for_rows(grid.height, [&](int by) {
     std::size_t row_rays = 0, row_found = 0, row_refused = 0;
+    std::vector<Entering> entering;
+    entering.reserve(neighbours.size());
     for (int bx = 0; bx < grid.width; ++bx) {
       const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
       const std::uint32_t first = self.missed.begin[s], end = self.missed.begin[s + 1];
@@ -344,7 +378,23 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
         bool was_refused = false;
         if (!std::isinf(t_from)) {
           ++row_rays;
+          // The views the ray passes through, in the order it enters them: a surface a view
+          // shows lies within the part of the ray inside its frustum, so once the nearest found
+          // is nearer than where the ray enters the next view, that view cannot show a nearer one
+          // (the six faces of a cube are each entered after the last is left).
+          entering.clear();
           for (const Neighbour& n : neighbours) {
+            const float t_in =
+                enters_view(n.view->trace->grid, n.from_center.point(o),
+                            n.from_center.direction(ray.direction), t_from, o.z, settings);
+            if (!std::isinf(t_in)) entering.push_back({t_in, &n});
+          }
+          std::sort(entering.begin(), entering.end(), [](const Entering& a, const Entering& b) {
+            return a.t < b.t || (a.t == b.t && a.n->index < b.n->index);
+          });
+          for (const Entering& e : entering) {
+            if (e.t >= best_along) break;
+            const Neighbour& n = *e.n;
             const Imath::V3f on = n.from_center.point(o);
             const Imath::V3f dn = n.from_center.direction(ray.direction);
             const std::int32_t hit = march_in(*n.view, on, dn, t_from, o.z, jitter, settings);

@@ -3,7 +3,7 @@
 Usage (Blender 3.4, headless):
   blender -b --factory-startup --python-exit-code 1 -P tests/accuracy/training/scenes.py -- \
       --scene NAME --out DIR [--samples N] [--frames N] [--resolution WxH] [--list] [--no-render]
-      [--panorama FRAME [--panorama-at camera|surfaces]]
+      [--panorama FRAME [--panorama-at camera|surfaces]] [--save FILE.blend]
 
 Builds scene NAME from primitives only (no assets), renders frames 1..N (default 8) into
 DIR/NAME.####.exr (Cycles CPU, N samples per pixel, default 256, times the scene's
@@ -17,7 +17,8 @@ afterwards. --list prints the scene names and what each one exercises
 camera.json only. --panorama FRAME renders instead what surrounds the camera at FRAME: a
 256x128 lat-long map (OpenEXR's convention with world +Z up, as ssgi --env-up z reads it), the
 same passes, from the camera's position or, with --panorama-at surfaces, from the mean position
-of the surfaces it sees, to DIR/NAME_panorama_AT.FRAME.exr (surroundings.sh).
+of the surfaces it sees, to DIR/NAME_panorama_AT.FRAME.exr (surroundings.sh). --save also writes
+the scene as built to FILE.blend (what ../../blender/render_views.py renders views of).
 Materials are pure diffuse (Diffuse BSDF) with varied albedo; emitters are Emission shaders.
 """
 
@@ -695,7 +696,7 @@ def main():
             flags.add(argv[i])
             i += 1
         elif (argv[i] in ("--scene", "--out", "--samples", "--frames", "--resolution",
-                          "--panorama", "--panorama-at") and i + 1 < len(argv)):
+                          "--panorama", "--panorama-at", "--save") and i + 1 < len(argv)):
             opts[argv[i]] = argv[i + 1]
             i += 2
         else:
@@ -727,6 +728,8 @@ def main():
         return
     with open(os.path.join(out_dir, "camera.json"), "w") as f:
         json.dump(camera_json(scene, name, samples, frames, world), f, indent=1)
+    if "--save" in opts:
+        bpy.ops.wm.save_as_mainfile(filepath=os.path.abspath(opts["--save"]))
     if "--no-render" in flags:
         return
     scene.render.filepath = os.path.join(os.path.abspath(out_dir), name + ".####")

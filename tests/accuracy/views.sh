@@ -1,0 +1,66 @@
+#!/usr/bin/env bash
+# What views (--view, --latlong-view) do to ssgi's accuracy on the training set
+# (training/scenes.py): each scene's shot as training/render.sh renders it (the same cache), and
+# per frame its views rendered by tests/blender/render_views.py from the scene saved as a .blend:
+# six 128x128 cube faces and a 512x256 lat-long at the shot camera, SSGI_VIEWS_SAMPLES samples
+# (default 64), kept beside the shot in the cache (SCENE.views/). Prints a markdown table, one
+# row per scene, of the relative RMSE of `indirect` against the path-traced DiffInd (truth_error,
+# as training.sh) for the oracle ambient, ssgi without views, with the six faces and with the
+# lat-long, each with its level (the mean of its indirect over the truth's), and the means.
+# The sample data's scenes (room, stage) have no .blend to render views from and are not in it.
+# Not run by ctest: it renders with Blender.
+# Usage: tests/accuracy/views.sh [BUILD_DIR] [-- extra ssgi options]
+# Environment: SSGI_TRAINING_SCENES (space-separated; default every training scene), render.sh's
+# SSGI_TRAINING_CACHE, SSGI_TRAINING_SAMPLES, SSGI_TRAINING_RESOLUTION, SSGI_TRAINING_FRAMES;
+# SSGI_VIEWS_SAMPLES, BLENDER.
+set -euo pipefail
+source "$(dirname "$0")/common.sh"
+blender=${BLENDER:-blender}
+mapfile -t scenes < <(training_scenes)
+cache=$(tests/accuracy/training/render.sh "${scenes[@]}" | tail -n 1)
+samples=${SSGI_VIEWS_SAMPLES:-64}
+frames=${SSGI_TRAINING_FRAMES:-8}
+resolution=${SSGI_TRAINING_RESOLUTION:-320x180}
+
+# render_views SCENE: its views in $cache/SCENE.views, once (a "done" file marks them whole).
+render_views() {
+  local views=$cache/$1.views
+  [ -f "$views/done" ] && return 0
+  rm -rf "$views"
+  mkdir -p "$views"
+  "$blender" -b --factory-startup --python-exit-code 1 -P tests/accuracy/training/scenes.py -- \
+    --scene "$1" --out "$views/scene" --frames "$frames" --resolution "$resolution" \
+    --no-render --save "$views/$1.blend" > "$views/blender.log" 2>&1
+  "$blender" -b "$views/$1.blend" --python-exit-code 1 --python tests/blender/render_views.py \
+    -- --out "$views" --name "$1" --frames "1-$frames" --face-size 128 --latlong-width 512 \
+    --samples "$samples" >> "$views/blender.log" 2>&1
+  touch "$views/done"
+}
+
+printf '| scene | oracle ambient | ssgi | level | six faces | level | lat-long | level |\n'
+printf '|---|---|---|---|---|---|---|---|\n'
+rows=()
+for scene in "${scenes[@]}"; do
+  render_views "$scene"
+  views=$cache/$scene.views
+  faces=()
+  for f in px nx py ny pz nz; do faces+=(--view "$views/$scene.$f.####.exr"); done
+  cells=()
+  for kind in none faces latlong; do
+    case $kind in
+      none) with=() ;;
+      faces) with=("${faces[@]}") ;;
+      latlong) with=(--latlong-view "$views/$scene.latlong.####.exr") ;;
+    esac
+    rm -f "$out"/o.*.exr
+    "$ssgi" run "$cache/$scene/$scene.####.exr" -o "$out/o.####.exr" -q --no-passthrough \
+      "${with[@]}" "${extra[@]}"
+    read -r _ ind _ _ oracle level _ <<< "$(truth_means "$cache/$scene" "$scene")"
+    cells+=("$ind" "$level")
+  done
+  printf '| %s | %s | %s | %s | %s | %s | %s | %s |\n' "$scene" "$oracle" "${cells[@]}"
+  rows+=("$oracle ${cells[*]}")
+done
+printf '%s\n' "${rows[@]}" | awk '{ for (c = 1; c <= 7; ++c) s[c] += $c; n++ }
+  END { printf "| **mean**, %d scenes | %.3f | %.3f | %.2f | %.3f | %.2f | %.3f | %.2f |\n",
+    n, s[1] / n, s[2] / n, s[3] / n, s[4] / n, s[5] / n, s[6] / n, s[7] / n }'
