@@ -119,6 +119,29 @@ void add_hit_light(const FrameTrace& t, const std::vector<std::array<float, 3>>&
   }
 }
 
+// What a trace sample's continued rays found: their light, and the shares of the miss model
+// they no longer leave to it (their environment light, cube shares and weight).
+struct Found {
+  float light[3] = {0, 0, 0}, env[3] = {0, 0, 0}, cube[kCubeFaces] = {};
+  float miss = 0;
+
+  // Into sample s: the light added to `foreign`, the shares taken out of `env`, `cube` and
+  // `miss`. The tracer summed the shares over its bins of equal angle, not per ray, so they are
+  // not exactly what is taken out: held at 0. (Shrinking all the shares by the found part of the
+  // misses instead measured worse: it leaves part of the found direction's share in place,
+  // counting that light twice.)
+  void apply(std::size_t s, Image* foreign, Image* env_share, Image* cube_share,
+             Image* miss_share) const {
+    for (int c = 0; c < 3; ++c) {
+      foreign->plane(c)[s] += light[c];
+      env_share->plane(c)[s] = std::max(env_share->plane(c)[s] - env[c], 0.0f);
+    }
+    for (int f = 0; f < kCubeFaces; ++f)
+      cube_share->plane(f)[s] = std::max(cube_share->plane(f)[s] - cube[f], 0.0f);
+    miss_share->plane(0)[s] = std::max(miss_share->plane(0)[s] - miss, 0.0f);
+  }
+};
+
 struct Neighbour {
   const View* view;
   Rigid from_center, to_center;
@@ -200,6 +223,34 @@ float first_hidden(const View& own, const Imath::V3f& o, const Imath::V3f& d, fl
     free_t = t;
   }
   return t_exit;
+}
+
+// Walks row `by` of `self`'s trace grid: for each missed ray of each sample, `ray_body(s, o, ray,
+// jitter, t_from, &found)` with the sample, the rays' camera-space origin, the ray, its march
+// jitter and where the frame stops seeing its way free (first_hidden: where it leaves the frame
+// or passes behind what the frame shows, or infinite when it never does); then each sample's
+// found light and shares go into the four images (Found::apply).
+template <typename RayBody>
+void walk_missed_rays(const FrameTrace& self, const View& own, int by, const GiSettings& settings,
+                      Image* foreign, Image* env, Image* cube, Image* miss,
+                      const RayBody& ray_body) {
+  const TraceGrid& grid = self.grid;
+  for (int bx = 0; bx < grid.width; ++bx) {
+    const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
+    const std::uint32_t first = self.missed.begin[s], end = self.missed.begin[s + 1];
+    if (first == end) continue;
+    const Imath::V3f o = self.missed.origin[s];
+    Found found;
+    for (std::uint32_t k = first; k < end; ++k) {
+      const MissedRay& ray = self.missed.rays[k];
+      const float jitter = ray_jitter(s, k - first, self.frame, settings.seed);
+      const float t_from =
+          first_hidden(own, o, ray.direction, leaves_view(grid, o, ray.direction, o.z), o.z,
+                       settings.max_steps, jitter);
+      ray_body(s, o, ray, jitter, t_from, &found);
+    }
+    found.apply(s, foreign, env, cube, miss);
+  }
 }
 
 // Marches camera-space ray (o, d) of neighbour `n` from parameter t_from on (its origin at depth
@@ -358,82 +409,65 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
     std::size_t row_rays = 0, row_found = 0, row_refused = 0;
     std::vector<Entering> entering;
     entering.reserve(neighbours.size());
-    for (int bx = 0; bx < grid.width; ++bx) {
-      const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
-      const std::uint32_t first = self.missed.begin[s], end = self.missed.begin[s + 1];
-      if (first == end) continue;
-      const Imath::V3f o = self.missed.origin[s];
-      float sum[3] = {0, 0, 0}, env_found[3] = {0, 0, 0}, cube_found[kCubeFaces] = {};
-      float miss_found = 0;
-      for (std::uint32_t k = first; k < end; ++k) {
-        const MissedRay& ray = self.missed.rays[k];
-        const float jitter = ray_jitter(s, k - first, self.frame, settings.seed);
-        const float t_from =
-            first_hidden(own, o, ray.direction, leaves_view(grid, o, ray.direction, o.z), o.z,
-                         settings.max_steps, jitter);
-        // Views at the frame's own time: of the surfaces they show on the ray, the nearest.
-        const Neighbour* best = nullptr;
-        std::int32_t best_hit = -1;
-        float best_along = std::numeric_limits<float>::infinity();
-        bool was_refused = false;
-        if (!std::isinf(t_from)) {
-          ++row_rays;
-          // The views the ray passes through, in the order it enters them: a surface a view
-          // shows lies within the part of the ray inside its frustum, so once the nearest found
-          // is nearer than where the ray enters the next view, that view cannot show a nearer one
-          // (the six faces of a cube are each entered after the last is left).
-          entering.clear();
-          for (const Neighbour& n : neighbours) {
-            const float t_in =
-                enters_view(n.view->trace->grid, n.from_center.point(o),
-                            n.from_center.direction(ray.direction), t_from, o.z, settings);
-            if (!std::isinf(t_in)) entering.push_back({t_in, &n});
-          }
-          std::sort(entering.begin(), entering.end(), [](const Entering& a, const Entering& b) {
-            return a.t < b.t || (a.t == b.t && a.n->index < b.n->index);
-          });
-          for (const Entering& e : entering) {
-            if (e.t >= best_along) break;
-            const Neighbour& n = *e.n;
-            const Imath::V3f on = n.from_center.point(o);
-            const Imath::V3f dn = n.from_center.direction(ray.direction);
-            const std::int32_t hit = march_in(*n.view, on, dn, t_from, o.z, jitter, settings);
-            if (hit < 0) continue;
-            const float along = (n.view->vertex(hit_pixel(hit)) - on).dot(dn);
-            if (!(along < best_along)) continue;
-            if (seen_past(own, n.to_center.point(on + along * dn))) {
-              was_refused = true;
-              continue;
+    walk_missed_rays(
+        self, own, by, settings, &hits.foreign, &hits.env, &hits.cube, &hits.miss,
+        [&](std::size_t s, const Imath::V3f& o, const MissedRay& ray, float jitter, float t_from,
+            Found* found_here) {
+          // Views at the frame's own time: of the surfaces they show on the ray, the nearest.
+          const Neighbour* best = nullptr;
+          std::int32_t best_hit = -1;
+          float best_along = std::numeric_limits<float>::infinity();
+          bool was_refused = false;
+          if (!std::isinf(t_from)) {
+            ++row_rays;
+            // The views the ray passes through, in the order it enters them: a surface a view
+            // shows lies within the part of the ray inside its frustum, so once the nearest found
+            // is nearer than where the ray enters the next view, that view cannot show a nearer one
+            // (the six faces of a cube are each entered after the last is left).
+            entering.clear();
+            for (const Neighbour& n : neighbours) {
+              const float t_in =
+                  enters_view(n.view->trace->grid, n.from_center.point(o),
+                              n.from_center.direction(ray.direction), t_from, o.z, settings);
+              if (!std::isinf(t_in)) entering.push_back({t_in, &n});
             }
-            best = &n;
-            best_hit = hit;
-            best_along = along;
+            std::sort(entering.begin(), entering.end(), [](const Entering& a, const Entering& b) {
+              return a.t < b.t || (a.t == b.t && a.n->index < b.n->index);
+            });
+            for (const Entering& e : entering) {
+              if (e.t >= best_along) break;
+              const Neighbour& n = *e.n;
+              const Imath::V3f on = n.from_center.point(o);
+              const Imath::V3f dn = n.from_center.direction(ray.direction);
+              const std::int32_t hit = march_in(*n.view, on, dn, t_from, o.z, jitter, settings);
+              if (hit < 0) continue;
+              const float along = (n.view->vertex(hit_pixel(hit)) - on).dot(dn);
+              if (!(along < best_along)) continue;
+              if (seen_past(own, n.to_center.point(on + along * dn))) {
+                was_refused = true;
+                continue;
+              }
+              best = &n;
+              best_hit = hit;
+              best_along = along;
+            }
           }
-        }
-        if (!best) {
-          if (was_refused) ++row_refused;
-          row_left[by].push_back(ray);
-          ++left_count[s];
-          continue;
-        }
-        add_hit_light(*best->view->trace, best->view->light, best_hit, ray.weight, sum);
-        if (found_rays) {
-          found_by_row[by].push_back({best->index, best_hit, ray.weight});
-          ++found_count[s];
-        }
-        self.misses.add(ray.direction, ray.weight, env_found, cube_found);
-        miss_found += ray.weight;
-        ++row_found;
-      }
-      // The found rays' shares leave the miss model, as continue_rays takes them out.
-      for (int c = 0; c < 3; ++c) {
-        hits.foreign.plane(c)[s] += sum[c];
-        hits.env.plane(c)[s] = std::max(hits.env.plane(c)[s] - env_found[c], 0.0f);
-      }
-      for (int f = 0; f < kCubeFaces; ++f)
-        hits.cube.plane(f)[s] = std::max(hits.cube.plane(f)[s] - cube_found[f], 0.0f);
-      hits.miss.plane(0)[s] = std::max(hits.miss.plane(0)[s] - miss_found, 0.0f);
-    }
+          if (!best) {
+            if (was_refused) ++row_refused;
+            row_left[by].push_back(ray);
+            ++left_count[s];
+            return;
+          }
+          add_hit_light(*best->view->trace, best->view->light, best_hit, ray.weight,
+                        found_here->light);
+          if (found_rays) {
+            found_by_row[by].push_back({best->index, best_hit, ray.weight});
+            ++found_count[s];
+          }
+          self.misses.add(ray.direction, ray.weight, found_here->env, found_here->cube);
+          found_here->miss += ray.weight;
+          ++row_found;
+        });
     rays += row_rays;
     found += row_found;
     refused += row_refused;
@@ -542,61 +576,41 @@ bool continue_rays(const std::vector<const FrameTrace*>& frames,
   std::atomic<std::size_t> rays{0}, found{0}, moving{0};
   parallel_for_rows(grid.height, [&](int by) {
     std::size_t row_rays = 0, row_found = 0, row_moving = 0;
-    for (int bx = 0; bx < grid.width; ++bx) {
-      const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
-      const std::uint32_t first = self.missed.begin[s], end = self.missed.begin[s + 1];
-      if (first == end) continue;
-      const Imath::V3f o = self.missed.origin[s];
-      float sum[3] = {0, 0, 0}, env_found[3] = {0, 0, 0}, cube_found[kCubeFaces] = {};
-      float miss_found = 0;
-      for (std::uint32_t k = first; k < end; ++k) {
-        const MissedRay& ray = self.missed.rays[k];
-        const float jitter = ray_jitter(s, k - first, self.frame, settings.seed);
-        // The frame has seen the ray's way free up to where it leaves the frame or passes
-        // behind something; what lies beyond, the neighbours tell.
-        const float t_from =
-            first_hidden(own, o, ray.direction, leaves_view(grid, o, ray.direction, o.z), o.z,
-                         settings.max_steps, jitter);
-        if (std::isinf(t_from)) continue;  // free all the way to its vanishing point
-        ++row_rays;
-        bool refused = false;
-        for (const Neighbour& n : neighbours) {
-          const Imath::V3f on = n.from_center.point(o);
-          const std::int32_t hit = march_in(*n.view, on, n.from_center.direction(ray.direction),
-                                            t_from, o.z, jitter, settings);
-          if (hit < 0) continue;
-          const std::int32_t h = hit_pixel(hit);
-          // The ray's point nearest the hit vertex: where the hit is, which the centre must
-          // not see as empty space.
-          const Imath::V3f x = n.view->vertex(h);
-          const Imath::V3f dn = n.from_center.direction(ray.direction);
-          const float along = (x - on).dot(dn);
-          if (seen_past(own, n.to_center.point(on + along * dn))) {
-            refused = true;
-            continue;
+    // What the found rays no longer leave to the miss model: their shares of it, as the miss
+    // model gives them for their directions.
+    walk_missed_rays(
+        self, own, by, settings, &foreign, &env, &cube, &miss,
+        [&](std::size_t, const Imath::V3f& o, const MissedRay& ray, float jitter, float t_from,
+            Found* found_here) {
+          // The frame has seen the ray's way free up to where it leaves the frame or passes
+          // behind something; what lies beyond, the neighbours tell.
+          if (std::isinf(t_from)) return;  // free all the way to its vanishing point
+          ++row_rays;
+          bool refused = false;
+          for (const Neighbour& n : neighbours) {
+            const Imath::V3f on = n.from_center.point(o);
+            const std::int32_t hit = march_in(*n.view, on, n.from_center.direction(ray.direction),
+                                              t_from, o.z, jitter, settings);
+            if (hit < 0) continue;
+            const std::int32_t h = hit_pixel(hit);
+            // The ray's point nearest the hit vertex: where the hit is, which the centre must
+            // not see as empty space.
+            const Imath::V3f x = n.view->vertex(h);
+            const Imath::V3f dn = n.from_center.direction(ray.direction);
+            const float along = (x - on).dot(dn);
+            if (seen_past(own, n.to_center.point(on + along * dn))) {
+              refused = true;
+              continue;
+            }
+            add_hit_light(*n.view->trace, n.view->light, hit, ray.weight, found_here->light);
+            self.misses.add(ray.direction, ray.weight, found_here->env, found_here->cube);
+            found_here->miss += ray.weight;
+            ++row_found;
+            refused = false;
+            break;
           }
-          add_hit_light(*n.view->trace, n.view->light, hit, ray.weight, sum);
-          self.misses.add(ray.direction, ray.weight, env_found, cube_found);
-          miss_found += ray.weight;
-          ++row_found;
-          refused = false;
-          break;
-        }
-        if (refused) ++row_moving;
-      }
-      // What the found rays no longer leave to the miss model: their shares of it, as the
-      // miss model gives them for their directions. The tracer summed the shares over its
-      // bins of equal angle, not per ray, so they are not exactly what was added: held at 0.
-      // (Shrinking all the shares by the found part of the misses instead measured worse: it
-      // leaves part of the found direction's share in place, counting that light twice.)
-      for (int c = 0; c < 3; ++c) {
-        foreign.plane(c)[s] += sum[c];
-        env.plane(c)[s] = std::max(env.plane(c)[s] - env_found[c], 0.0f);
-      }
-      for (int f = 0; f < kCubeFaces; ++f)
-        cube.plane(f)[s] = std::max(cube.plane(f)[s] - cube_found[f], 0.0f);
-      miss.plane(0)[s] = std::max(miss.plane(0)[s] - miss_found, 0.0f);
-    }
+          if (refused) ++row_moving;
+        });
     rays += row_rays;
     found += row_found;
     moving += row_moving;

@@ -63,6 +63,19 @@ Image feature_thickness(const GBuffer& g, const SurfaceModel& model) {
       static_cast<float>(cam.cy - (g.data_window.y0 - g.display_window.y0)), model);
 }
 
+template <typename Connect>
+void DepthMesh::set_triangles(int j, const Connect& connect) {
+  const std::size_t row = static_cast<std::size_t>(j) * width_;
+  for (int i = 0; i + 1 < width_; ++i) {
+    const std::size_t a = row + i, r = a + 1, d = a + width_, c = a + width_ + 1;
+    const bool diagonal = connect(a, c);
+    std::uint8_t t = 0;
+    if (diagonal && connect(a, r) && connect(r, c)) t |= kUpper;
+    if (diagonal && connect(a, d) && connect(d, c)) t |= kLower;
+    triangles_[a] = t;
+  }
+}
+
 DepthMesh::DepthMesh(const Image& depth, const Image& thickness)
     : width_(depth.width()),
       height_(depth.height()),
@@ -78,18 +91,9 @@ DepthMesh::DepthMesh(const Image& depth, const Image& thickness)
       inverse_back_[p] = 1.0f / slab_back(z[p], static_cast<int>(p));
     }
     if (j + 1 >= height_) return;
-    auto connect = [&](std::size_t p, std::size_t q) {
+    set_triangles(j, [&](std::size_t p, std::size_t q) {
       return connected(z[p], static_cast<int>(p), z[q], static_cast<int>(q));
-    };
-    for (int i = 0; i + 1 < width_; ++i) {
-      const std::size_t a = row + i, r = a + 1, d = a + width_, c = a + width_ + 1;
-      // Each triangle exists when its three vertices are pairwise connected.
-      const bool diagonal = connect(a, c);
-      std::uint8_t t = 0;
-      if (diagonal && connect(a, r) && connect(r, c)) t |= kUpper;
-      if (diagonal && connect(a, d) && connect(d, c)) t |= kLower;
-      triangles_[a] = t;
-    }
+    });
   });
 }
 
@@ -105,22 +109,13 @@ void DepthMesh::join_tangent_neighbours(const Image& depth, const Image& normal,
     return Imath::V3f(normal.plane(0)[p], normal.plane(1)[p], normal.plane(2)[p]);
   };
   parallel_for_rows(height_ - 1, [&](int j) {
-    const std::size_t row = static_cast<std::size_t>(j) * width_;
-    auto connect = [&](std::size_t p, std::size_t q) {
+    set_triangles(j, [&](std::size_t p, std::size_t q) {
       if (connected(z[p], static_cast<int>(p), z[q], static_cast<int>(q))) return true;
       if (!std::isfinite(z[p]) || !std::isfinite(z[q])) return false;
       const Imath::V3f a = point(p), b = point(q);
       return std::fabs((b - a).dot(n(p))) <= kSmoothTolerance * z[p] &&
              std::fabs((a - b).dot(n(q))) <= kSmoothTolerance * z[q];
-    };
-    for (int i = 0; i + 1 < width_; ++i) {
-      const std::size_t a = row + i, r = a + 1, d = a + width_, c = a + width_ + 1;
-      const bool diagonal = connect(a, c);
-      std::uint8_t t = 0;
-      if (diagonal && connect(a, r) && connect(r, c)) t |= kUpper;
-      if (diagonal && connect(a, d) && connect(d, c)) t |= kLower;
-      triangles_[a] = t;
-    }
+    });
   });
 }
 

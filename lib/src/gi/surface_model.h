@@ -167,6 +167,9 @@ class DepthMesh {
   }
 
   static constexpr std::uint8_t kUpper = 1, kLower = 2;
+  // Row j's triangles: each exists when `connect` joins its three vertices pairwise.
+  template <typename Connect>
+  void set_triangles(int j, const Connect& connect);
   int width_, height_;
   std::vector<float> thickness_;         // per pixel
   std::vector<float> inverse_depth_;     // 1/z per pixel
