@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "io/views.h"
 #include "memory_plan.h"
 #include "run_options.h"
 #include "simd.h"
@@ -286,7 +287,7 @@ void print_text(const ssgi::InputOptions& in, const ssgi::SequenceInfo& seq, con
     std::printf("  %s%s: %dx%d %s", v.file.c_str(), v.info->still ? " (still)" : "", w, h,
                 projection_name(v.info->projection));
     if (v.info->projection == ssgi::Projection::kLatLong)
-      std::printf(" (six cube faces of %d)", std::max(8, (w + 2) / 4));
+      std::printf(" (six cube faces of %d)", ssgi::detail::latlong_face_size(vs.display_window));
     if (!v.camera) {
       std::printf(", no camera: %s\n", v.error.c_str());
       continue;

@@ -72,11 +72,12 @@ TEST_F(Cli, ViewsBringTheLightTheFrameDoesNotShowAndCountAsTraced) {
       0.01);
   // The input's channels pass through as they were.
   for (const auto& [name, plane] : none.planes)
-    if (name.rfind("ViewLayer.", 0) == 0)
+    if (name.rfind("ViewLayer.", 0) == 0) {
       EXPECT_EQ(std::memcmp(plane.data(), with_faces.planes.at(name).data(),
                             plane.size() * sizeof(float)),
                 0)
           << name;
+    }
   EXPECT_TRUE(all_finite(with_faces));
   EXPECT_TRUE(all_finite(with_latlong));
 }
@@ -105,9 +106,10 @@ TEST_F(Cli, ViewsGiveTheSameBitsInAnyRun) {
       const std::vector<float>& x = a.planes.at(ch);
       EXPECT_EQ(std::memcmp(x.data(), b.planes.at(ch).data(), x.size() * sizeof(float)), 0)
           << "1 vs 2 threads, frame " << f << " " << ch;
-      if (chunked)
+      if (chunked) {
         EXPECT_EQ(std::memcmp(x.data(), c.planes.at(ch).data(), x.size() * sizeof(float)), 0)
             << "whole vs chunked, frame " << f << " " << ch;
+      }
     }
   }
 }
@@ -160,8 +162,36 @@ TEST_F(Cli, ViewsThatCannotBeReadAreRefusedBeforeAnythingIsWritten) {
       {"run", in, "-o", path("o.####.exr"), "--frames", "2", "--view", path("short.####.exr")});
   EXPECT_EQ(short_view.exit_code, 4) << short_view.err;
   expect_one_error(short_view, path("short.0004.exr"), "a view covers every frame the run reads");
+  // A view without albedo: exit 3 naming it, before anything is written.
+  ExrImage no_albedo = read_exr(testdata("views/static.nz.exr"));
+  std::vector<std::string> kept;
+  for (const std::string& c : no_albedo.spec.channelnames)
+    if (c.find(".DiffCol.") == std::string::npos) kept.push_back(c);
+  no_albedo.spec.channelnames = kept;
+  write_exr(path("noalbedo.exr"), no_albedo);
+  const CliResult albedo =
+      run_ssgi({"run", in, "-o", path("o.####.exr"), "--view", path("noalbedo.exr")});
+  EXPECT_EQ(albedo.exit_code, 3) << albedo.err;
+  expect_one_error(albedo, path("noalbedo.exr"), "has no albedo channels");
   for (const std::string& name : entries())
     EXPECT_EQ(name.rfind("o.", 0), std::string::npos) << name;
+}
+
+TEST_F(Cli, SkipExistingKeepsOnlyFramesMadeWithTheSameViews) {
+  const std::string in = testdata("static/static.####.exr");
+  const std::vector<std::string> base = {
+      "run", in, "--frames", "1", "-o", path("o.####.exr"), "-q", "--skip-existing"};
+  ASSERT_EQ(run_ssgi(base).exit_code, 0);
+  const ExrImage without = read_exr(path("o.0001.exr"));
+  // The views change the light: a frame made without them is made again.
+  ASSERT_EQ(run_ssgi(with(base, face_views("static", false))).exit_code, 0);
+  const ExrImage with_views = read_exr(path("o.0001.exr"));
+  EXPECT_GT(mean(with_views.planes.at("coverage.Y")), mean(without.planes.at("coverage.Y")) + 0.2);
+  // And one made with them is kept when they are the same: the file is not written again.
+  const auto written = fs::last_write_time(path("o.0001.exr"));
+  const CliResult again = run_ssgi(with(base, face_views("static", false)));
+  ASSERT_EQ(again.exit_code, 0);
+  EXPECT_EQ(fs::last_write_time(path("o.0001.exr")), written);
 }
 
 TEST_F(Cli, NonFiniteValuesInAViewAreHolesNeverNaN) {

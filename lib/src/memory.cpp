@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "io/oiio_files.h"
+#include "io/views.h"
 #include "reference/reference.h"
 #include "ssgi/error.h"
 
@@ -258,7 +259,7 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
     for (const ViewInfo& v : seq.views) {
       const std::uint64_t vw = v.sequence->data_window.width(),
                           vh = v.sequence->data_window.height();
-      const std::uint64_t face = std::max<std::uint64_t>(8, (vw + 2) / 4);
+      const std::uint64_t face = detail::latlong_face_size(v.sequence->display_window);
       view_pixels += v.projection == Projection::kLatLong ? 6 * face * face : vw * vh;
     }
     const std::uint64_t view_grid = view_pixels / (static_cast<std::uint64_t>(scale) * scale) + 1;

@@ -17,8 +17,11 @@ const Plan& Pipeline::plan() const { return stages_->plan(); }
 const GiSettings& Pipeline::settings() const { return stages_->settings(); }
 const ColorManagement& Pipeline::color() const { return stages_->color(); }
 
-Image Pipeline::indirect_light(const GBuffer& frame, Image* coverage) const {
-  return stages_->indirect_light(frame, coverage);
+Image Pipeline::indirect_light(const GBuffer& frame, Image* coverage,
+                               const std::vector<GBuffer>* views) const {
+  if (!views) return stages_->indirect_light(frame, coverage);
+  const detail::LitViews lit = stages_->light_views(*views, frame.frame);
+  return stages_->indirect_light(frame, coverage, &lit);
 }
 
 std::string Pipeline::describe_misses(const GBuffer& frame) const {

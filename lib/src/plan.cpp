@@ -206,7 +206,7 @@ Plan make_plan(const SequenceInfo& seq, const GiSettings& s) {
   if (!seq.views.empty()) {
     if (s.tracer != Tracer::kSlices) {
       plan.warnings.push_back(
-          "--view: the views are not read: only the slice tracer's missed "
+          "--view: the views are not used: only the slice tracer's missed "
           "rays continue in them (--tracer slices)");
       plan.reasons.push_back("views: off (the slice tracer's misses only)");
     } else {

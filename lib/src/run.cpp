@@ -47,6 +47,7 @@ void check_outputs(const SequenceInfo& seq, const SequencePattern& out, const st
   for (int g : seq.frames_on_disk) {
     inputs.emplace(resolved(seq.pattern.path_for(g)), g);
     if (seq.context) inputs.emplace(resolved(seq.context->pattern.path_for(g)), g);
+    for (const ViewInfo& v : seq.views) inputs.emplace(resolved(v.path_for(g)), g);
   }
   std::set<std::string> directories;
   for (int f : seq.frames) {
@@ -82,6 +83,10 @@ std::string settings_text(const RunOptions& o, const SequenceInfo& seq) {
   if (!o.input.camera.sidecar.empty()) add("camera", o.input.camera.sidecar);
   // Which frames the context is, like which frames the input is, is data, not a setting.
   if (seq.context) add("context", "yes");
+  // The views are settings: what they show changes the light (which of their frames is read,
+  // like the input's, is data).
+  for (const ViewInfo& v : seq.views)
+    add(v.projection == Projection::kLatLong ? "latlong-view" : "view", v.pattern);
   add("compression", o.write.compression);
   add("datatype", o.write.half ? "half" : "float");
   add("passthrough", o.write.passthrough ? "yes" : "no");

@@ -51,10 +51,11 @@ struct Camera {
 
   // Horizontal field of view over `display_width` pixels, in degrees.
   double hfov_deg(int display_width) const;
-  // Camera-space point to continuous display-window pixel coordinates. Meaningful for
-  // p.z > 0 only: the caller tests z (behind the camera the result is mirrored or infinite).
+  // Camera-space point to continuous display-window pixel coordinates. For a pinhole camera
+  // meaningful for p.z > 0 only: the caller tests z (behind the camera the result is mirrored or
+  // infinite); for a lat-long camera any p but the origin (the longitude and latitude of its
+  // direction).
   void project(const Imath::V3d& p, double* px, double* py) const;
-  // For a lat-long camera, any p but the origin: the longitude and latitude of its direction.
   // Continuous display-window pixel coordinates and planar depth z to a camera-space point (for
   // a lat-long camera, z is the distance along the pixel's ray).
   Imath::V3d unproject(double px, double py, double z) const;
@@ -68,12 +69,6 @@ struct Camera {
 // source "--fov". Throws Error(kUsage) unless 0 < hfov_deg < 180 and pixel_aspect > 0.
 Camera camera_from_fov(double hfov_deg, const Box2i& display_window, double pixel_aspect = 1.0);
 
-// A camera from OpenEXR's standard worldToCamera and worldToNDC attributes (NDC (0,0) top-left,
-// (1,1) bottom-right of the display window, divide by w), off-centre shifts included. The
-// file's camera axes may point either way: world_to_camera is flipped to x right, y up,
-// +z forward. Throws Error(kInput) naming `file` on a singular or non-finite matrix, or when
-// inverse(worldToCamera) * worldToNDC is not a pinhole projection at the camera origin
-// (orthographic, skewed, tilted) or looks like a -1..1 screen matrix.
 // A lat-long camera (Projection::kLatLong) over `display_window` with the header's
 // worldToCamera, whose camera space looks along -z with +y up (as Blender, Arnold, Houdini and
 // USD write it): flipped to the library's +z forward. Source "header worldToCamera (lat-long)".
@@ -81,6 +76,12 @@ Camera camera_from_fov(double hfov_deg, const Box2i& display_window, double pixe
 Camera latlong_camera(const Imath::M44d& world_to_camera, const Box2i& display_window,
                       const std::string& file);
 
+// A camera from OpenEXR's standard worldToCamera and worldToNDC attributes (NDC (0,0) top-left,
+// (1,1) bottom-right of the display window, divide by w), off-centre shifts included. The
+// file's camera axes may point either way: world_to_camera is flipped to x right, y up,
+// +z forward. Throws Error(kInput) naming `file` on a singular or non-finite matrix, or when
+// inverse(worldToCamera) * worldToNDC is not a pinhole projection at the camera origin
+// (orthographic, skewed, tilted) or looks like a -1..1 screen matrix.
 Camera camera_from_matrices(const Imath::M44d& world_to_camera, const Imath::M44d& world_to_ndc,
                             const Box2i& display_window, const std::string& file);
 

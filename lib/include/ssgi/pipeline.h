@@ -4,6 +4,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "ssgi/color.h"
 #include "ssgi/gbuffer.h"
@@ -33,8 +34,11 @@ class Pipeline {
   const ColorManagement& color() const;
 
   // The frame's indirect light (3 channels) without temporal filtering; with `coverage`, its
-  // coverage at the frame's resolution too (FrameResult::coverage).
-  Image indirect_light(const GBuffer& frame, Image* coverage = nullptr) const;
+  // coverage at the frame's resolution too (FrameResult::coverage). With `views` (the frame's
+  // views of the sequence's --view options, as read_views gives them), its missed rays continue
+  // in them when the plan says so (Plan::views).
+  Image indirect_light(const GBuffer& frame, Image* coverage = nullptr,
+                       const std::vector<GBuffer>* views = nullptr) const;
 
   // What the miss model decides for `frame` (man ssgi-gi, MISSES) and the numbers it decides
   // from, in one line: what -v prints per frame.

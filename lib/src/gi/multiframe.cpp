@@ -362,8 +362,7 @@ std::string ContinuationReport::describe(int frame) const {
 std::string ViewsReport::describe(int frame) const {
   std::ostringstream s;
   s << "frame " << frame << ": views: ";
-  if (views == 0)
-    return s.str() + "nothing continued (no view with a camera other than the frame's)";
+  if (views == 0) return s.str() + "nothing continued (no view has a world transform)";
   s << rays << " missed rays continued in " << views << (views == 1 ? " view" : " views") << "; "
     << found << " met a surface";
   if (refused) s << ", " << refused << " more met only surfaces the frame sees past (not taken)";

@@ -75,7 +75,7 @@ struct FrameTrace {
 
 // The continuation's numbers for a frame's views (-v).
 struct ViewsReport {
-  int views = 0;            // views with a camera other than the frame's
+  int views = 0;            // views with a world transform (the others are not marched)
   std::size_t rays = 0;     // missed rays continued (not seen free to their vanishing point)
   std::size_t found = 0;    // of those, the ones that met a surface in a view
   std::size_t refused = 0;  // rays that met only surfaces the frame sees past (not taken)

@@ -898,7 +898,7 @@ InputFrame read_input_frame(const SequenceInfo& seq, int frame, RoleMask roles,
   GBuffer g = convert_gbuffer(seq, frame, roles, options, color, *input, fill, report);
   in.reset();
   g = with_context(seq, frame, roles, options, color, std::move(g), report);
-  return {std::move(g), std::move(input)};
+  return {std::move(g), std::move(input), {}};
 }
 
 }  // namespace detail

@@ -18,6 +18,11 @@ std::string ViewInfo::path_for(int frame) const {
 }
 
 namespace detail {
+
+int latlong_face_size(const Box2i& display_window) {
+  return std::max(8, (display_window.width() + 2) / 4);
+}
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -78,7 +83,9 @@ std::vector<ViewInfo> open_views(const SequenceInfo& shot, const InputOptions& o
     info.still = !parse_sequence_pattern(v.pattern).has_frame_field;
     InputOptions o = view_options(options, v);
     if (info.still) {
-      if (!fs::exists(v.pattern)) throw_io(v.pattern, std::string(option_of(v)) + ": no such file");
+      if (!fs::exists(v.pattern))
+        throw_io(v.pattern, std::string(option_of(v)) +
+                                ": no such file (the preview's OCIO view is --display-view)");
     } else {
       o.frames = std::to_string(first_frame);
     }
@@ -97,10 +104,11 @@ std::vector<ViewInfo> open_views(const SequenceInfo& shot, const InputOptions& o
     const std::string first = info.still ? v.pattern : seq.pattern.path_for(first_frame);
     if (v.projection == Projection::kLatLong && seq.normals_from_depth)
       throw_input(first, "has no normal channels, which a lat-long view needs");
-    if (!seq.layout.has(Role::kDirect))
-      throw_input(first, std::string(option_of(v)) +
-                             ": has no direct light channels: a view brings the light its "
-                             "surfaces reflect");
+    for (const Role role : {Role::kDepth, Role::kAlbedo, Role::kDirect})
+      if (!seq.layout.has(role))
+        throw_input(first, std::string(option_of(v)) + ": has no " + role_name(role) +
+                               " channels, which a view needs (its surfaces, and the light they "
+                               "reflect)");
     Camera camera;
     try {
       camera = read_camera(seq, first_frame, o);
@@ -173,7 +181,7 @@ std::vector<GBuffer> read_views(const SequenceInfo& shot, int frame, const Input
 
 std::vector<GBuffer> latlong_faces(const GBuffer& ll, int size) {
   const int w = ll.width(), h = ll.height();
-  if (size <= 0) size = std::max(8, (w + 2) / 4);
+  if (size <= 0) size = latlong_face_size(ll.display_window);
   const Camera& cam = ll.camera;
   const double half = size / 2.0;
   const float inf = std::numeric_limits<float>::infinity();
@@ -209,22 +217,28 @@ std::vector<GBuffer> latlong_faces(const GBuffer& ll, int size) {
         const Imath::V3d d = a.right * u + a.up * v + a.forward;
         double px, py;
         cam.project(d, &px, &py);
-        const int lx = std::clamp(
-            static_cast<int>(std::floor(px - (ll.data_window.x0 - ll.display_window.x0))), 0,
-            w - 1);
-        const int ly = std::clamp(
-            static_cast<int>(std::floor(py - (ll.data_window.y0 - ll.display_window.y0))), 0,
-            h - 1);
-        const float distance = ll.depth.at(0, lx, ly);
+        // The panorama pixel (the display window's edges hold longitude +-180 and latitude
+        // +-90), in its data window: a hole where the data window does not reach.
+        const int dx =
+            std::clamp(static_cast<int>(std::floor(px)), 0, ll.display_window.width() - 1);
+        const int dy =
+            std::clamp(static_cast<int>(std::floor(py)), 0, ll.display_window.height() - 1);
+        const int lx = dx + ll.display_window.x0 - ll.data_window.x0;
+        const int ly = dy + ll.display_window.y0 - ll.data_window.y0;
+        const bool inside = lx >= 0 && ly >= 0 && lx < w && ly < h;
         // Planar depth in the face: the distance along the direction (u, v, 1) of length |d|.
-        const double z = static_cast<double>(distance) / std::sqrt(d.dot(d));
-        const bool surface = std::isfinite(z) && z > 0;
-        g.depth.at(0, x, y) = surface ? static_cast<float>(z) : inf;
+        const double z =
+            inside ? static_cast<double>(ll.depth.at(0, lx, ly)) / std::sqrt(d.dot(d)) : 0.0;
+        if (!(std::isfinite(z) && z > 0)) {
+          g.depth.at(0, x, y) = inf;  // no surface: normal, albedo and light stay 0
+          continue;
+        }
+        g.depth.at(0, x, y) = static_cast<float>(z);
         const Imath::V3d n{ll.normal.at(0, lx, ly), ll.normal.at(1, lx, ly),
                            ll.normal.at(2, lx, ly)};
-        g.normal.at(0, x, y) = surface ? static_cast<float>(n.dot(a.right)) : 0.0f;
-        g.normal.at(1, x, y) = surface ? static_cast<float>(n.dot(a.up)) : 0.0f;
-        g.normal.at(2, x, y) = surface ? static_cast<float>(n.dot(a.forward)) : 0.0f;
+        g.normal.at(0, x, y) = static_cast<float>(n.dot(a.right));
+        g.normal.at(1, x, y) = static_cast<float>(n.dot(a.up));
+        g.normal.at(2, x, y) = static_cast<float>(n.dot(a.forward));
         for (int c = 0; c < 3; ++c) {
           g.albedo.at(c, x, y) = ll.albedo.at(c, lx, ly);
           g.direct.at(c, x, y) = ll.direct.at(c, lx, ly);

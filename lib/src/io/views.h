@@ -36,10 +36,13 @@ std::vector<GBuffer> read_views(const SequenceInfo& shot, int frame, const Input
                                 const ColorManagement* color);
 
 // A lat-long view (its camera Projection::kLatLong, depth the distance along each pixel's ray)
-// as the six 90-degree faces of a cube at its camera, each `size` pixels square (0: a quarter
-// of its width), looking along its camera's +z, -z, +x, -x, +y and -y: each face pixel takes the
-// lat-long pixel its centre's direction falls in, its depth made planar in the face's camera,
+// as the six 90-degree faces of a cube at its camera, each `size` pixels square (0:
+// latlong_face_size), looking along its camera's +z, -z, +x, -x, +y and -y: each face pixel takes
+// the lat-long pixel its centre's direction falls in, its depth made planar in the face's camera,
 // its normal turned into that camera's space.
 std::vector<GBuffer> latlong_faces(const GBuffer& latlong, int size = 0);
+
+// The side of a lat-long's faces: a quarter of its display window's width (at least 8).
+int latlong_face_size(const Box2i& display_window);
 
 }  // namespace ssgi::detail
