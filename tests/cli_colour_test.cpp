@@ -332,7 +332,8 @@ TEST_F(Cli, PreviewGoesThroughTheConfigsDisplayAndView) {
   };
   const OIIO::ImageBuf plain = preview("plain", {});
   const OIIO::ImageBuf standard = preview("standard", {"--colorconfig", kOcioConfig});
-  const OIIO::ImageBuf raw = preview("raw", {"--colorconfig", kOcioConfig, "--display-view", "Raw"});
+  const OIIO::ImageBuf raw =
+      preview("raw", {"--colorconfig", kOcioConfig, "--display-view", "Raw"});
   // The config's sRGB / Standard view is the sRGB curve: the built-in one's picture, to the
   // 8-bit step where float rounding crosses one.
   const auto standard_diff = OIIO::ImageBufAlgo::compare(standard, plain, 1.01 / 255, 0);

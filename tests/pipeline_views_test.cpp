@@ -102,6 +102,12 @@ std::vector<GBuffer> cube_faces(int size) {
   return faces;
 }
 
+// `views` numbered with frame `frame`, as read_views numbers a frame's views.
+std::vector<GBuffer> numbered(std::vector<GBuffer> views, int frame) {
+  for (GBuffer& v : views) v.frame = frame;
+  return views;
+}
+
 GiSettings view_settings() {
   GiSettings s = converged_settings();
   s.tracer = Tracer::kSlices;
@@ -173,7 +179,7 @@ TEST(Views, LightBehindTheCameraIsFoundInCubeFacesAndALatLong) {
   // With the six faces it is the back wall's light.
   const detail::FrameStages with(shot.with_views({Projection::kPinhole}), s);
   ASSERT_TRUE(with.plan().views);
-  const detail::LitViews faces = with.light_views(cube_faces(32), g.frame);
+  const detail::LitViews faces = with.light_views(numbered(cube_faces(32), g.frame));
   ASSERT_EQ(faces.traces.size(), 6u);
   const Means cube = inner_means(with.indirect_light(g, &coverage, &faces), coverage);
   std::printf("six faces: indirect %.4f (expected %.4f), coverage %.3f\n", cube.light, kLit,
@@ -187,7 +193,7 @@ TEST(Views, LightBehindTheCameraIsFoundInCubeFacesAndALatLong) {
   ll.world_to_camera = Imath::M44d();
   const detail::FrameStages with_ll(shot.with_views({Projection::kLatLong}), s);
   const detail::LitViews from_ll =
-      with_ll.light_views(detail::latlong_faces(render(ll, 256, 128)), g.frame);
+      with_ll.light_views(numbered(detail::latlong_faces(render(ll, 256, 128)), g.frame));
   const Means pano = inner_means(with_ll.indirect_light(g, &coverage, &from_ll), coverage);
   std::printf("lat-long: indirect %.4f (expected %.4f), coverage %.3f\n", pano.light, kLit,
               pano.coverage);

@@ -163,15 +163,13 @@ Image FrameStages::denoise_on_grid(const GBuffer& g, Image light) const {
 // other views' light.
 constexpr int kViewPasses = 3;
 
-LitViews FrameStages::light_views(const std::vector<GBuffer>& views, int frame) const {
+LitViews FrameStages::light_views(const std::vector<GBuffer>& views) const {
   LitViews out;
   if (!plan_.views) return out;
   for (const GBuffer& v : views) {
-    GBuffer numbered = v;
-    numbered.frame = frame;
     std::shared_ptr<FrameTrace> t;
-    Image light = trace(numbered, nullptr, nullptr, &t);
-    out.light.push_back(denoise_on_grid(numbered, std::move(light)));
+    Image light = trace(v, nullptr, nullptr, &t);
+    out.light.push_back(denoise_on_grid(v, std::move(light)));
     out.traces.push_back(std::move(t));
   }
   // Light bounces among the views: each one's missed rays continued in the others, which bring

@@ -40,9 +40,9 @@ class FrameStages {
 
   // The frame's views (each as read_views gives it: a pinhole G-buffer with a world transform)
   // lit as frames are, each at its own resolution, with their rays continued in one another
-  // (continue_in_views) so that light bounces among them; `frame` numbers their noise. Empty
-  // when the plan continues rays in no view (Plan::views).
-  LitViews light_views(const std::vector<GBuffer>& views, int frame) const;
+  // (continue_in_views) so that light bounces among them; each view's `frame` numbers its noise
+  // (read_views gives it the shot's). Empty when the plan continues rays in no view (Plan::views).
+  LitViews light_views(const std::vector<GBuffer>& views) const;
 
   // The frame's light traced and denoised on the trace grid, with what the temporal stage needs
   // of it (TracedLight); with `views`, its missed rays continued in them first.

@@ -20,7 +20,7 @@ const ColorManagement& Pipeline::color() const { return stages_->color(); }
 Image Pipeline::indirect_light(const GBuffer& frame, Image* coverage,
                                const std::vector<GBuffer>* views) const {
   if (!views) return stages_->indirect_light(frame, coverage);
-  const detail::LitViews lit = stages_->light_views(*views, frame.frame);
+  const detail::LitViews lit = stages_->light_views(*views);
   return stages_->indirect_light(frame, coverage, &lit);
 }
 

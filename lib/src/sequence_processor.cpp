@@ -415,7 +415,7 @@ class Processor {
   std::optional<InputFrame> take(const Step& s, InputFrame frame) {
     const int n = seq_.frames[s.output];
     if (mode_ == TemporalMode::kNone) return frame;
-    const LitViews views = stages_.light_views(frame.views, frame.g.frame);
+    const LitViews views = stages_.light_views(frame.views);
     frame.views.clear();
     TracedLight traced = stages_.trace_light(frame.g, &views);
     if (mode_ == TemporalMode::kEma) {
@@ -517,7 +517,7 @@ class Processor {
                     "frame " + std::to_string(n) + " was not read");
       m->input = std::move(own->input);
       const LitViews views =
-          mode_ == TemporalMode::kNone ? stages_.light_views(own->views, own->g.frame) : LitViews();
+          mode_ == TemporalMode::kNone ? stages_.light_views(own->views) : LitViews();
       own->views.clear();
       g = std::make_shared<GBuffer>(std::move(own->g));
       if (mode_ == TemporalMode::kEma) {

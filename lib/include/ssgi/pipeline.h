@@ -35,8 +35,9 @@ class Pipeline {
 
   // The frame's indirect light (3 channels) without temporal filtering; with `coverage`, its
   // coverage at the frame's resolution too (FrameResult::coverage). With `views` (the frame's
-  // views of the sequence's --view options, as read_views gives them), its missed rays continue
-  // in them when the plan says so (Plan::views).
+  // views of the sequence's --view options, as read_views gives them, each numbered with the
+  // frame's number, which seeds its noise), its missed rays continue in them when the plan says
+  // so (Plan::views).
   Image indirect_light(const GBuffer& frame, Image* coverage = nullptr,
                        const std::vector<GBuffer>* views = nullptr) const;
 
