@@ -282,7 +282,7 @@ void detail::write_frame(const std::string& path, const GBuffer& frame,
     detail::check_unchanged(input, detail::decode_input(*in, input.path));
   }
   std::size_t clamped = 0;
-  std::vector<std::byte> host_rows;
+  detail::UninitializedVector<std::byte> host_rows;  // each strip read whole into it
   detail::AtomicImageWriter writer(path, specs, "frame");
   for (std::size_t k = 0; k < specs.size(); ++k) {
     if (source[k] < 0) {

@@ -90,7 +90,8 @@ void read_float_channels(OIIO::ImageInput& in, int subimage,
   const int chunk = rows_per_chunk(spec);
   const std::size_t row_bytes = static_cast<std::size_t>(spec.width) * n * sizeof(float);
   const int rows = strip_rows(row_bytes, chunk, spec.height);
-  std::vector<float> strip(static_cast<std::size_t>(rows) * spec.width * n);
+  // Each read fills the rows it reads, and only those are copied out.
+  detail::UninitializedVector<float> strip(static_cast<std::size_t>(rows) * spec.width * n);
   // Strips start on chunk boundaries, which count from the part's top.
   for (int top = spec.y + (y0 - spec.y) / chunk * chunk; top < y1; top += rows) {
     const int bottom = std::min(top + rows, spec.y + spec.height);
@@ -234,7 +235,7 @@ void AtomicImageWriter::write_part_in_strips(
     fail(one_line(out_->geterror()));
   const std::size_t row_bytes = spec.scanline_bytes(/*native=*/true);
   const int rows = strip_rows(row_bytes, std::lcm(rows_per_chunk(spec), row_multiple), spec.height);
-  std::vector<std::byte> strip(row_bytes * rows);
+  detail::UninitializedVector<std::byte> strip(row_bytes * rows, std::byte{0});
   for (int y = 0; y < spec.height; y += rows) {
     const int n = std::min(rows, spec.height - y);
     fill(y, n, strip.data());
