@@ -19,9 +19,9 @@ constexpr std::size_t kHugePage = std::size_t{2} << 20;
 constexpr std::size_t kLargeBlock = std::size_t{1} << 20;
 
 // The bytes allocate_block takes for a block of `bytes`: whole huge pages where the last one
-// would be at least half used, so that its tail is one huge page too (a 1080p RGB plane,
-// 24.9 MB, ends 1.8 MB into its 13th); otherwise `bytes`, its tail left in 4 KB pages (a 1080p
-// plane, 8.3 MB, would take a fifth more memory for its last 0.3 MB).
+// would be at least half used, so that it is a huge page too (a 1080p plane, 7.9 MiB, ends
+// 1.9 MiB into its fourth); otherwise `bytes`, its tail left in 4 KB pages (a 2K plane,
+// 8.4 MiB, would take a fifth more memory for its last 0.4 MiB).
 std::size_t block_bytes(std::size_t bytes) {
   const std::size_t tail = bytes % kHugePage;
   return tail >= kHugePage / 2 ? bytes - tail + kHugePage : bytes;
