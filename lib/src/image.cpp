@@ -31,9 +31,10 @@ std::size_t block_bytes(std::size_t bytes) {
 
 // Each 4 KB page a buffer's first touch faults costs the kernel microseconds: on a two-core
 // virtual machine 20 us, 45 ms to fill a 16.6 MB block in 4 KB pages against 1.3 ms in huge
-// ones; a rendered 1080p shot's GI 31% faster on one thread and on two (tests/bench/README.md,
-// "Huge pages"). Only the 2 MB pages inside the block are advised, so that nothing outside it
-// is made resident; a kernel whose transparent huge pages are off ignores the advice.
+// ones, and a rendered 1080p shot's GI a third faster on one thread, 28% on two
+// (tests/bench/README.md, "Huge pages"). Only the 2 MB pages inside the block are advised, so
+// that nothing outside it is made resident; a kernel whose transparent huge pages are off
+// ignores the advice.
 void* allocate_block(std::size_t bytes) {
   if (bytes < kLargeBlock) return ::operator new(bytes);
   const std::size_t size = block_bytes(bytes);
