@@ -50,7 +50,7 @@ void free_block(void* p, std::size_t bytes) noexcept {
   if (bytes < kLargeBlock)
     ::operator delete(p);
   else
-    ::operator delete (p, block_bytes(bytes), std::align_val_t{kHugePage});
+    ::operator delete (p, std::align_val_t{kHugePage});
 }
 
 }  // namespace detail
