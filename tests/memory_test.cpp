@@ -99,6 +99,7 @@ std::string mapping_flags(const void* address) {
   bool inside = false;
   for (std::string line; std::getline(smaps, line);) {
     std::uintptr_t begin = 0, end = 0;
+    // A mapping's line starts "begin-end perms"; its fields' lines "Name:" (no space first).
     if (std::sscanf(line.c_str(), "%" SCNxPTR "-%" SCNxPTR " ", &begin, &end) == 2 &&
         line.find(':') > line.find(' '))
       inside = a >= begin && a < end;

@@ -24,7 +24,6 @@ void free_block(void* p, std::size_t bytes) noexcept;
 // large buffers are allocated in huge pages (allocate_block).
 template <typename T>
 struct UninitializedAllocator : std::allocator<T> {
-  using value_type = T;
   template <typename U>
   struct rebind {
     using other = UninitializedAllocator<U>;

@@ -235,6 +235,7 @@ void AtomicImageWriter::write_part_in_strips(
     fail(one_line(out_->geterror()));
   const std::size_t row_bytes = spec.scanline_bytes(/*native=*/true);
   const int rows = strip_rows(row_bytes, std::lcm(rows_per_chunk(spec), row_multiple), spec.height);
+  // Zeroed: the file gets every byte of it, and a fill need not write padding it does not use.
   detail::UninitializedVector<std::byte> strip(row_bytes * rows, std::byte{0});
   for (int y = 0; y < spec.height; y += rows) {
     const int n = std::min(rows, spec.height - y);
