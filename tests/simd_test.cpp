@@ -428,6 +428,11 @@ TEST_P(SimdTarget, MarchSideMatchesTheScalarTwinBitForBit) {
         for (int j = 0; j < n_scalar; ++j) {
           ASSERT_EQ(simd.pixel[j + 1], scalar.pixel[j + 1]) << trial << " " << steps << " " << j;
           ASSERT_EQ(simd.bits[j], scalar.bits[j]) << trial << " " << steps << " " << j;
+          // A vertex's own slab, which the missed rays read (where they pass behind it).
+          if (scalar.pixel[j + 1] >= 0) {
+            ASSERT_EQ(simd.front_u[j + 1], scalar.front_u[j + 1]) << trial << " " << j;
+            ASSERT_EQ(simd.back_u[j + 1], scalar.back_u[j + 1]) << trial << " " << j;
+          }
           samples += scalar.pixel[j + 1] >= 0;
           bits_set += scalar.bits[j] != 0;
           // Consecutive samples: where the kernel decides whether to bridge.

@@ -195,45 +195,14 @@ float enters_view(const TraceGrid& g, const Imath::V3f& o, const Imath::V3f& d, 
   return lo < hi ? lo : inf;
 }
 
-// Where ray (o, d) of the centre frame, free in its view up to `t_exit` where it leaves the
-// view (leaves_view), first passes behind what the frame shows by more than the slab: the
-// parameter of the last free sample before that point, of `steps` jittered samples evenly spaced
-// on the screen (so the frame's own tracer's rule), or t_exit when it never does.
-float first_hidden(const View& own, const Imath::V3f& o, const Imath::V3f& d, float t_exit,
-                   float scale, int steps, float jitter) {
-  const TraceGrid& g = own.trace->grid;
-  const float t1 = std::isinf(t_exit) ? kFarFactor * scale : t_exit;
-  const Imath::V3f b = o + t1 * d;
-  if (!(o.z > 0) || !(b.z > 0)) return t_exit;
-  const float h0 = 1.0f / o.z, h1 = 1.0f / b.z;
-  const float sx0 = g.cx + g.fx * o.x / o.z, sy0 = g.cy - g.fy * o.y / o.z;
-  const float sx1 = g.cx + g.fx * b.x / b.z, sy1 = g.cy - g.fy * b.y / b.z;
-  // Beyond floats (a depth near FLT_MAX): nothing to sample.
-  if (!std::isfinite(t1 + sx0 + sy0 + sx1 + sy1 + h1)) return t_exit;
-  float free_t = 0;
-  for (int i = 0; i < steps; ++i) {
-    const float f = (static_cast<float>(i) + jitter) / static_cast<float>(steps);
-    const float h = h0 + f * (h1 - h0);
-    MeshPoint surface;
-    // The screen point's parameter along the ray: 1/z is linear on the screen.
-    const float t = t1 * (f * h1) / h;
-    if (own.mesh.surface_at(sx0 + f * (sx1 - sx0), sy0 + f * (sy1 - sy0), &surface) &&
-        1.0f / h > surface.back_z)
-      return free_t;
-    free_t = t;
-  }
-  return t_exit;
-}
-
 // Walks row `by` of `self`'s trace grid: for each missed ray of each sample, `ray_body(s, o, ray,
 // jitter, t_from, &found)` with the sample, the rays' camera-space origin, the ray, its march
-// jitter and where the frame stops seeing its way free (first_hidden: where it leaves the frame
-// or passes behind what the frame shows, or infinite when it never does); then each sample's
-// found light and shares go into the four images (Found::apply).
+// jitter and where the frame stops seeing its way free (where the tracer saw it pass behind what
+// the frame shows, else where it leaves the frame, or infinite when it never does); then each
+// sample's found light and shares go into the four images (Found::apply).
 template <typename RayBody>
-void walk_missed_rays(const FrameTrace& self, const View& own, int by, const GiSettings& settings,
-                      Image* foreign, Image* env, Image* cube, Image* miss,
-                      const RayBody& ray_body) {
+void walk_missed_rays(const FrameTrace& self, int by, const GiSettings& settings, Image* foreign,
+                      Image* env, Image* cube, Image* miss, const RayBody& ray_body) {
   const TraceGrid& grid = self.grid;
   for (int bx = 0; bx < grid.width; ++bx) {
     const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
@@ -244,9 +213,7 @@ void walk_missed_rays(const FrameTrace& self, const View& own, int by, const GiS
     for (std::uint32_t k = first; k < end; ++k) {
       const MissedRay& ray = self.missed.rays[k];
       const float jitter = ray_jitter(s, k - first, self.frame, settings.seed);
-      const float t_from =
-          first_hidden(own, o, ray.direction, leaves_view(grid, o, ray.direction, o.z), o.z,
-                       settings.max_steps, jitter);
+      const float t_from = std::min(ray.hidden, leaves_view(grid, o, ray.direction, o.z));
       ray_body(s, o, ray, jitter, t_from, &found);
     }
     found.apply(s, foreign, env, cube, miss);
@@ -409,7 +376,7 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
     std::vector<Entering> entering;
     entering.reserve(neighbours.size());
     walk_missed_rays(
-        self, own, by, settings, &hits.foreign, &hits.env, &hits.cube, &hits.miss,
+        self, by, settings, &hits.foreign, &hits.env, &hits.cube, &hits.miss,
         [&](std::size_t s, const Imath::V3f& o, const MissedRay& ray, float jitter, float t_from,
             Found* found_here) {
           // Views at the frame's own time: of the surfaces they show on the ray, the nearest.
@@ -578,7 +545,7 @@ bool continue_rays(const std::vector<const FrameTrace*>& frames,
     // What the found rays no longer leave to the miss model: their shares of it, as the miss
     // model gives them for their directions.
     walk_missed_rays(
-        self, own, by, settings, &foreign, &env, &cube, &miss,
+        self, by, settings, &foreign, &env, &cube, &miss,
         [&](std::size_t, const Imath::V3f& o, const MissedRay& ray, float jitter, float t_from,
             Found* found_here) {
           // The frame has seen the ray's way free up to where it leaves the frame or passes

@@ -31,11 +31,14 @@
 
 namespace ssgi::detail {
 
-// One missed ray of a trace sample: a camera-space unit direction and its share of the
-// sample's cosine-weighted hemisphere.
+// One missed ray of a trace sample: a camera-space unit direction, its share of the sample's
+// cosine-weighted hemisphere, and how far the frame sees it free: its parameter at the tracer's
+// last sample before it first passes behind what the frame shows, or the infinite float when it
+// does not while on the screen.
 struct MissedRay {
   Imath::V3f direction;
   float weight;
+  float hidden;
 };
 using PixelMisses = std::vector<MissedRay>;
 

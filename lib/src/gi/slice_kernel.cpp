@@ -352,6 +352,8 @@ int march_side_scalar(const MeshView& mesh, const SliceFrame& f, const SideMarch
     }
     out->bits[j] = sector_bits(lo, hi);
     out->pixel[j + 1] = mark_side(pixel, behind);
+    out->front_u[j + 1] = fa;
+    out->back_u[j + 1] = fb;
     before_valid = true;
     before_x = x, before_y = y, before_z = z, before_thick = thick;
     before_n[0] = n[0], before_n[1] = n[1], before_n[2] = n[2];

@@ -113,9 +113,10 @@ struct SideMarch {
 // What march_side leaves per step j: bits[j], the sectors the sample's slab shadows together
 // with the strip to sample j - 1 when both lie on one continuous surface (0 where the side
 // meets no surface), and pixel[j + 1], the vertex whose light it brings (-1: none), marked
-// kSeenFromBehind when the ray to the sample meets its surface from behind. The other
-// arrays are the kernel's own (index j + 1 for step j, index 0 standing for "no step before the
-// first"), padded to whole vectors.
+// kSeenFromBehind when the ray to the sample meets its surface from behind, and front_u[j + 1]
+// and back_u[j + 1], the sector coordinates of its own slab's front and back (where pixel[j + 1]
+// is a vertex). The other arrays are the kernel's own (index j + 1 for step j, index 0 standing
+// for "no step before the first"), padded to whole vectors.
 struct SideSamples {
   std::vector<float> x, y, z, nx, ny, nz, thickness, front_u, back_u, distance2;
   std::vector<std::int32_t> pixel;

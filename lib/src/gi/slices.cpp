@@ -149,10 +149,27 @@ std::uint64_t slice_hash(std::uint64_t key, int slice) {
   return mix64(key ^ static_cast<std::uint64_t>(slice) << 48);
 }
 
-SideSamples& scratch() {
-  thread_local SideSamples samples;
-  return samples;
+// One per side of a slice: the missed rays read both sides' samples (MarchedSide).
+SideSamples& scratch(int side) {
+  thread_local SideSamples samples[2];
+  return samples[side];
 }
+
+// One marched side of a slice as the missed rays read it: its samples, the steps taken (0 when
+// the side was not marched) and where each step lies (SideMarch's terms).
+struct MarchedSide {
+  const SideSamples* samples = nullptr;
+  int count = 0;
+  float t_max = 0, u_step = 0;
+  int steps = 1;
+  float sx = 0, sy = 0;
+
+  // Step j's screen distance from the origin, as march_side places it.
+  float distance(int j) const {
+    const float frac = (static_cast<float>(j) + u_step) * (1.0f / static_cast<float>(steps));
+    return 1.0f + (t_max - 1.0f) * frac * frac;
+  }
+};
 
 // One trace sample's hits before they join its row's.
 struct PixelHits {
@@ -241,14 +258,36 @@ struct SliceTracer {
     }
   }
 
+  // Where missed ray (o, d), of sector coordinate u, first passes behind a slab that a sample of
+  // its side shows: its parameter at the sample before (0 before the first), or the infinite
+  // float when it never does. The slice's plane holds the camera, so the ray meets each sample's
+  // line of sight, and lies beyond its slab's back exactly when its coordinate lies beyond the
+  // back's, away from the front's; a sample beyond where the ray's projection ends (its
+  // vanishing point) it never reaches, nor any after it. The ray's screen distance along the
+  // side at parameter x is x a / (o.z (o.z + x d.z)).
+  float hidden_from(const MarchedSide& side, float u, const Imath::V3f& o,
+                    const Imath::V3f& d) const {
+    const float a = fx * (o.z * d.x - o.x * d.z) * side.sx - fy * (o.z * d.y - o.y * d.z) * side.sy;
+    auto parameter = [&](float e) { return e * o.z * o.z / (a - e * o.z * d.z); };
+    for (int j = 0; j < side.count; ++j) {
+      if (side.samples->pixel[j + 1] < 0) continue;
+      const float front = side.samples->front_u[j + 1], back = side.samples->back_u[j + 1];
+      if (!((u - back) * (back - front) > 0)) continue;
+      if (!(a - side.distance(j) * o.z * d.z > 0)) break;
+      return j == 0 ? 0.0f : parameter(side.distance(j - 1));
+    }
+    return std::numeric_limits<float>::infinity();
+  }
+
   // The missed sectors of a slice as rays for other frames to continue (multiframe.h): the
   // missed sectors in order, cut into kContinuedPerSlice runs of (nearly) equal count, and per
   // run the ray of one of its sectors, drawn at random, weighing the whole run: an unbiased
   // estimate of what the run's rays would find. The ray's angle inverts the slice's measure by
   // interpolation in a table of it over the half-disc.
   void record_slice_misses(std::uint32_t missed, const SliceMeasure& measure, const Angle& lowest,
-                           float h_lo, float to_sector, float u_rot, const Imath::V3f& view,
-                           const Imath::V3f& t, float sector_weight, std::uint64_t key,
+                           float h_lo, float to_sector, float u_rot, const Imath::V3f& origin,
+                           const Imath::V3f& view, const Imath::V3f& t, float sector_weight,
+                           const MarchedSide marched[2], std::uint64_t key,
                            PixelMisses* record) const {
     // A coarse table: the measure is smooth, and the tracer runs this for every slice with a
     // miss (64 steps took a tenth of the final preset's tracing at 1080p, perf).
@@ -287,7 +326,10 @@ struct SliceTracer {
       const float cd = 1.0f - 0.5f * d2 + d2 * d2 / 24.0f, sd = delta * (1.0f - d2 / 6.0f);
       const float cm = cosines[i] * cd - sines[i] * sd, sm = sines[i] * cd + cosines[i] * sd;
       const Imath::V3f d = normalized(cm * view + sm * t);
-      record->push_back({d, sector_weight * static_cast<float>(size)});
+      const float hidden = sm > 0   ? hidden_from(marched[0], u, origin, d)
+                           : sm < 0 ? hidden_from(marched[1], u, origin, d)
+                                    : std::numeric_limits<float>::infinity();
+      record->push_back({d, sector_weight * static_cast<float>(size), hidden});
     }
   }
 
@@ -371,6 +413,7 @@ struct SliceTracer {
                              highest.theta, h_lo,     to_sector, u_rot};
 
       std::uint32_t mask = 0;
+      MarchedSide marched[2];
       for (int side = 0; side < 2 && mask != all; ++side) {
         const float sx = side ? -dx : dx, sy = side ? -dy : dy;
         // Distance to the data window's border along the side.
@@ -397,8 +440,9 @@ struct SliceTracer {
                               inv_fy,
                               max_distance * max_distance,
                               model.thickness};
-        SideSamples& samples = scratch();
+        SideSamples& samples = scratch(side);
         const int count = march_side(mesh_view, frame, march, &samples);
+        marched[side] = {&samples, count, t_max, u_step, steps, sx, sy};
         kept += collect_hits(samples, count, sector_weight, &mask, hits.pixel.data() + kept,
                              hits.weight.data() + kept);
       }
@@ -408,8 +452,8 @@ struct SliceTracer {
         add_slice_misses(missed, measure, lowest, h_lo, to_sector, u_rot, view, t, sector_weight,
                          env_light, cube);
       if (missed && record)
-        record_slice_misses(missed, measure, lowest, h_lo, to_sector, u_rot, view, t, sector_weight,
-                            slice_hash(noise_key, i), record);
+        record_slice_misses(missed, measure, lowest, h_lo, to_sector, u_rot, origin, view, t,
+                            sector_weight, marched, slice_hash(noise_key, i), record);
     }
     // Each slice's weight |n_p| x its measure has mean 1 over the slice angles; dividing by the
     // sampled slices' own total makes a pixel's weights sum to 1 exactly (a ratio estimator:
