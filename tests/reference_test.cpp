@@ -10,6 +10,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -170,6 +171,87 @@ TEST(Reference, AgreesWithADenseWalkThroughTheModel) {
   std::printf("%d of %d rays differ from the dense walk\n", differ, rays);
   EXPECT_GT(rays, 2500);
   EXPECT_LE(differ, rays / 1000);
+}
+
+// A mesh with bounds (DepthMesh::bound_quads, as the views' meshes have) skips what a ray
+// cannot meet and marches to the same hits: the sampled march (segments longer than the step
+// budget) to the same for every ray, the exact walk, restarted tile by tile, for all but the
+// rays that pass within rounding of a cell's edge. The rays of every 3rd pixel of the sample
+// room, with budgets that make most segments sampled (8 steps) or all of them exact.
+TEST(Reference, BoundedMeshMarchesToTheSameHits) {
+  const GiSettings s = reference_settings(4, {0, 0, 0});
+  const Frame f = load("sample/sample.0001.exr", s);
+  const GBuffer& g = f.g;
+  const detail::SurfaceModel model{static_cast<float>(s.thickness)};
+  const Image thickness = detail::feature_thickness(g, model);
+  const detail::DepthMesh plain(g.depth, thickness);
+  detail::DepthMesh bounded(g.depth, thickness);
+  bounded.bound_quads();
+  ASSERT_TRUE(bounded.bounded());
+  ASSERT_FALSE(plain.bounded());
+  // The bounds themselves: a point nearer than every surface is clear of each quad and tile;
+  // one at the depth of a quad's corner is not, nor of its tile.
+  float nearest = std::numeric_limits<float>::infinity();
+  for (std::size_t q = 0; q < g.depth.plane_size(); ++q)
+    nearest = std::min(nearest, g.depth.plane(0)[q]);
+  int quads = 0;
+  for (int j = 0; j + 1 < g.height(); ++j)
+    for (int i = 0; i + 1 < g.width(); ++i) {
+      if (!bounded.has_triangle(i, j, true) && !bounded.has_triangle(i, j, false)) continue;
+      const float near = 2.0f / nearest, corner = 1.0f / g.depth.at(0, i, j);
+      const int ti = i / detail::DepthMesh::kTile, tj = j / detail::DepthMesh::kTile;
+      ASSERT_TRUE(bounded.clear_of(i, j, near, near)) << i << " " << j;
+      ASSERT_TRUE(bounded.tile_clear_of(ti, tj, near, near)) << i << " " << j;
+      ASSERT_FALSE(bounded.clear_of(i, j, corner, corner)) << i << " " << j;
+      ASSERT_FALSE(bounded.tile_clear_of(ti, tj, corner, corner)) << i << " " << j;
+      ASSERT_FALSE(plain.clear_of(i, j, near, near));
+      ++quads;
+    }
+  EXPECT_GT(quads, 4000);
+  const Camera& cam = g.camera;
+  for (const int steps : {8, 4096}) {
+    int rays = 0, hits = 0, differ = 0;
+    for (int p = 0; p < g.width() * g.height(); p += 3) {
+      const int x = p % g.width(), y = p / g.width();
+      if (!g.is_surface(x, y)) continue;
+      const detail::PixelRays pixel_rays(g, s, x, y);
+      const Imath::V3f& o = pixel_rays.origin();
+      for (int k = 0; k < 8; ++k) {
+        float jitter;
+        const Imath::V3f d = pixel_rays.direction(k, &jitter);
+        // The segment as the march builds it (march.cpp, march_ray).
+        float t_end = 1e6f * o.z;
+        if (d.z < 0) t_end = std::min(t_end, (o.z - 1e-3f * o.z) / -d.z);
+        const Imath::V3f e = o + t_end * d;
+        const float sx0 = static_cast<float>(cam.cx + cam.fx * o.x / o.z);
+        const float sy0 = static_cast<float>(cam.cy - cam.fy * o.y / o.z);
+        detail::ScreenSegment seg{sx0,
+                                  sy0,
+                                  static_cast<float>(cam.cx + cam.fx * e.x / e.z) - sx0,
+                                  static_cast<float>(cam.cy - cam.fy * e.y / e.z) - sy0,
+                                  1.0f / o.z,
+                                  1.0f / e.z,
+                                  0.0f,
+                                  1.0f};
+        if (!std::isfinite(seg.dx) || !std::isfinite(seg.dy) ||
+            !detail::clip_to_window(&seg, static_cast<float>(g.width()),
+                                    static_cast<float>(g.height())))
+          continue;
+        const int a = detail::march_segment(plain, seg, steps, jitter, x, y);
+        const int b = detail::march_segment(bounded, seg, steps, jitter, x, y);
+        ++rays;
+        hits += a >= 0;
+        differ += a != b;
+      }
+    }
+    std::printf("%d steps: %d rays, %d hits, %d differ\n", steps, rays, hits, differ);
+    EXPECT_GT(rays, 10000);
+    EXPECT_GT(hits, rays / 4);
+    if (steps == 8)
+      EXPECT_EQ(differ, 0);
+    else
+      EXPECT_LE(differ, rays / 10000);
+  }
 }
 
 // The ray ends are the same for 1 and 2 threads, and run to run.

@@ -14,33 +14,50 @@ namespace {
 // Samples the segment at `steps` evenly spaced, jittered points: a sample hits when it is
 // inside a slab, or when the ray passed the front of one continuous surface since the last
 // sample. Approximate (it can step over a thin slab or hit a pixel late); used when the ray
-// is longer than the step budget.
+// is longer than the step budget. On a bounded mesh a sample in front of its whole quad
+// (DepthMesh::in_front_at) is known not to hit, and its surface is looked up only when the
+// next sample asks whether the ray passed it.
 int march_sampled(const DepthMesh& mesh, const ScreenSegment& s, int steps, float jitter,
                   int self_x, int self_y) {
   const float df = (s.f_hi - s.f_lo) / steps;
   const float inf = std::numeric_limits<float>::infinity();
-  bool prev_valid = false, prev_in_front = false;
-  float prev_z = 0.0f;
+  bool prev_valid = false, prev_in_front = false, prev_deferred = false;
+  float prev_z = 0.0f, prev_x = 0.0f, prev_y = 0.0f;
   int prev_pixel = 0;
   for (int i = 0; i < steps; ++i) {
     const float f = s.f_lo + df * (i + jitter);
     const float sx = s.sx0 + s.dx * f, sy = s.sy0 + s.dy * f;
     if (static_cast<int>(std::floor(sx)) == self_x && static_cast<int>(std::floor(sy)) == self_y)
       continue;
+    const float hr = s.h0 + (s.h1 - s.h0) * f;
+    bool covered;
+    if (mesh.in_front_at(sx, sy, hr, &covered)) {
+      prev_valid = covered;
+      prev_in_front = true;
+      prev_deferred = true;
+      prev_x = sx, prev_y = sy;
+      continue;
+    }
     MeshPoint surface;
     if (!mesh.surface_at(sx, sy, &surface)) {
       prev_valid = false;
       continue;
     }
-    const float hr = s.h0 + (s.h1 - s.h0) * f;
     const float z_ray = hr > 0 ? 1.0f / hr : inf;
     const bool behind_front = z_ray >= surface.z;
+    if (behind_front && prev_valid && prev_in_front && prev_deferred) {
+      MeshPoint before;
+      mesh.surface_at(prev_x, prev_y, &before);
+      prev_z = before.z;
+      prev_pixel = before.pixel;
+    }
     if (behind_front &&
         (z_ray <= surface.back_z || (prev_valid && prev_in_front &&
                                      mesh.connected(prev_z, prev_pixel, surface.z, surface.pixel))))
       return surface.pixel;
     prev_valid = true;
     prev_in_front = !behind_front;
+    prev_deferred = false;
     prev_z = surface.z;
     prev_pixel = surface.pixel;
   }
@@ -76,33 +93,95 @@ void clip_to_box(const ScreenSegment& s, float x0, float y0, float x1, float y1,
 // triangle's slab: within one triangle the ray's and the surface's inverse depths are both
 // affine in f, so "behind the front, before the back" is an interval. The first point of it
 // outside the ray's own pixel is the hit. This is the surface model itself, which the Embree
-// reference traces too.
-int walk_exact(const DepthMesh& mesh, const ScreenSegment& s, int self_x, int self_y) {
-  float own_lo = 2.0f, own_hi = 2.0f;  // where the segment is inside its own pixel
-  clip_to_box(s, self_x, self_y, self_x + 1.0f, self_y + 1.0f, &own_lo, &own_hi);
-  const float past_own = kPastEdgePx / std::max(std::fabs(s.dx), std::fabs(s.dy));
-  const float u0 = s.sx0 - 0.5f, v0 = s.sy0 - 0.5f;  // lattice of pixel centres
-  const float inf = std::numeric_limits<float>::infinity();
-  const float f_start = s.f_lo;
-  int i = static_cast<int>(std::floor(u0 + s.dx * f_start));
-  int j = static_cast<int>(std::floor(v0 + s.dy * f_start));
-  const int step_i = s.dx > 0 ? 1 : -1, step_j = s.dy > 0 ? 1 : -1;
-  float next_u = s.dx != 0 ? ((step_i > 0 ? i + 1 : i) - u0) / s.dx : inf;
-  float next_v = s.dy != 0 ? ((step_j > 0 ? j + 1 : j) - v0) / s.dy : inf;
-  const float delta_u = s.dx != 0 ? 1.0f / std::fabs(s.dx) : inf;
-  const float delta_v = s.dy != 0 ? 1.0f / std::fabs(s.dy) : inf;
+// reference traces too. On a bounded mesh the walk goes tile by tile first, and walks the
+// quads of a tile only where the ray may meet a slab in it (DepthMesh::tile_clear_of), and
+// skips the quads it cannot meet one in (clear_of).
+class ExactWalk {
+ public:
+  ExactWalk(const DepthMesh& mesh, const ScreenSegment& s, int self_x, int self_y)
+      : mesh_(mesh), s_(s), u0_(s.sx0 - 0.5f), v0_(s.sy0 - 0.5f) {
+    clip_to_box(s, self_x, self_y, self_x + 1.0f, self_y + 1.0f, &own_lo_, &own_hi_);
+    past_own_ = kPastEdgePx / std::max(std::fabs(s.dx), std::fabs(s.dy));
+  }
+
+  int run() const {
+    if (!mesh_.bounded()) return quads(s_.f_lo, s_.f_hi);
+    const float tile = static_cast<float>(DepthMesh::kTile);
+    return dda(s_.f_lo, s_.f_hi, tile, 2 * (mesh_.width() + mesh_.height()) / DepthMesh::kTile + 4,
+               [&](int ti, int tj, float fa, float fb) {
+                 return mesh_.tile_clear_of(ti, tj, inverse_depth(fa), inverse_depth(fb))
+                            ? -1
+                            : quads(fa, fb);
+               });
+  }
+
+ private:
+  float inverse_depth(float f) const { return s_.h0 + (s_.h1 - s_.h0) * f; }
+
+  // Calls visit(i, j, fa, fb) for each cell (i, j) of a lattice of `size` units (of pixel
+  // centres) the segment crosses for f in [from, to], in order, with the part [fa, fb] in it,
+  // until it returns a hit (>= 0); that hit, or -1.
+  template <typename Visit>
+  int dda(float from, float to, float size, int max_cells, const Visit& visit) const {
+    const float inf = std::numeric_limits<float>::infinity();
+    int i = static_cast<int>(std::floor((u0_ + s_.dx * from) / size));
+    int j = static_cast<int>(std::floor((v0_ + s_.dy * from) / size));
+    const int step_i = s_.dx > 0 ? 1 : -1, step_j = s_.dy > 0 ? 1 : -1;
+    float next_u = s_.dx != 0 ? ((step_i > 0 ? i + 1 : i) * size - u0_) / s_.dx : inf;
+    float next_v = s_.dy != 0 ? ((step_j > 0 ? j + 1 : j) * size - v0_) / s_.dy : inf;
+    const float delta_u = s_.dx != 0 ? size / std::fabs(s_.dx) : inf;
+    const float delta_v = s_.dy != 0 ? size / std::fabs(s_.dy) : inf;
+    float f = from;
+    for (int cell = 0; cell < max_cells && f < to; ++cell) {
+      const float fe = std::min(std::min(next_u, next_v), to);
+      if (fe > f) {
+        const int hit = visit(i, j, f, fe);
+        if (hit >= 0) return hit;
+        f = fe;
+      }
+      if (next_u < next_v) {
+        i += step_i;
+        next_u += delta_u;
+      } else {
+        j += step_j;
+        next_v += delta_v;
+      }
+    }
+    return -1;
+  }
+
+  // The first hit for f in [from, to], quad by quad.
+  int quads(float from, float to) const {
+    return dda(from, to, 1.0f, 2 * (mesh_.width() + mesh_.height()) + 4,
+               [&](int i, int j, float f, float fe) {
+                 if (mesh_.clear_of(i, j, inverse_depth(f), inverse_depth(fe))) return -1;
+                 // The diagonal (i, j)-(i+1, j+1), where u - i = v - j, splits the quad in two.
+                 const float fd =
+                     s_.dx != s_.dy
+                         ? ((static_cast<float>(i) - u0_) - (static_cast<float>(j) - v0_)) /
+                               (s_.dx - s_.dy)
+                         : std::numeric_limits<float>::infinity();
+                 if (!(fd > f && fd < fe)) return piece(i, j, f, fe);
+                 const int hit = piece(i, j, f, fd);
+                 return hit >= 0 ? hit : piece(i, j, fd, fe);
+               });
+  }
 
   // The first point of [fa, fb] inside the slab of the triangle of quad (i, j) it lies in.
-  auto piece = [&](float fa, float fb) {
+  int piece(int i, int j, float fa, float fb) const {
     if (!(fb > fa)) return -1;
+    const ScreenSegment& s = s_;
+    const float u0 = u0_, v0 = v0_;
     const float fm = 0.5f * (fa + fb);
     const bool upper = (u0 + s.dx * fm - i) >= (v0 + s.dy * fm - j);
-    if (!mesh.has_triangle(i, j, upper)) return -1;
-    const float surf_a = mesh.inverse_depth_at(i, j, upper, u0 + s.dx * fa - i, v0 + s.dy * fa - j);
-    const float surf_b = mesh.inverse_depth_at(i, j, upper, u0 + s.dx * fb - i, v0 + s.dy * fb - j);
-    const float back_a = mesh.inverse_back_at(i, j, upper, u0 + s.dx * fa - i, v0 + s.dy * fa - j);
-    const float back_b = mesh.inverse_back_at(i, j, upper, u0 + s.dx * fb - i, v0 + s.dy * fb - j);
-    const float ray_a = s.h0 + (s.h1 - s.h0) * fa, ray_b = s.h0 + (s.h1 - s.h0) * fb;
+    if (!mesh_.has_triangle(i, j, upper)) return -1;
+    const float surf_a =
+        mesh_.inverse_depth_at(i, j, upper, u0 + s.dx * fa - i, v0 + s.dy * fa - j);
+    const float surf_b =
+        mesh_.inverse_depth_at(i, j, upper, u0 + s.dx * fb - i, v0 + s.dy * fb - j);
+    const float back_a = mesh_.inverse_back_at(i, j, upper, u0 + s.dx * fa - i, v0 + s.dy * fa - j);
+    const float back_b = mesh_.inverse_back_at(i, j, upper, u0 + s.dx * fb - i, v0 + s.dy * fb - j);
+    const float ray_a = inverse_depth(fa), ray_b = inverse_depth(fb);
     float lo = fa, hi = fb;
     // Keeps the part of [lo, hi] where the affine r (ra at fa, rb at fb) is >= 0.
     auto keep_non_negative = [&](float ra, float rb) {
@@ -120,43 +199,19 @@ int walk_exact(const DepthMesh& mesh, const ScreenSegment& s, int self_x, int se
         !keep_non_negative(ray_a - back_a, ray_b - back_b))
       return -1;
     float f = lo;
-    if (f >= own_lo && f <= own_hi) {
-      f = own_hi + past_own;
+    if (f >= own_lo_ && f <= own_hi_) {
+      f = own_hi_ + past_own_;
       if (f > hi) return -1;
     }
-    return mesh.heaviest_vertex(i, j, upper, u0 + s.dx * f - i, v0 + s.dy * f - j);
-  };
-
-  float f = f_start;
-  const int max_cells = 2 * (mesh.width() + mesh.height()) + 4;
-  for (int cell = 0; cell < max_cells && f < s.f_hi; ++cell) {
-    const float fe = std::min(std::min(next_u, next_v), s.f_hi);
-    if (fe > f) {
-      // The diagonal (i, j)-(i+1, j+1), where u - i = v - j, splits the quad in two.
-      const float fd =
-          s.dx != s.dy
-              ? ((static_cast<float>(i) - u0) - (static_cast<float>(j) - v0)) / (s.dx - s.dy)
-              : inf;
-      int hit;
-      if (fd > f && fd < fe) {
-        hit = piece(f, fd);
-        if (hit < 0) hit = piece(fd, fe);
-      } else {
-        hit = piece(f, fe);
-      }
-      if (hit >= 0) return hit;
-      f = fe;
-    }
-    if (next_u < next_v) {
-      i += step_i;
-      next_u += delta_u;
-    } else {
-      j += step_j;
-      next_v += delta_v;
-    }
+    return mesh_.heaviest_vertex(i, j, upper, u0 + s.dx * f - i, v0 + s.dy * f - j);
   }
-  return -1;
-}
+
+  const DepthMesh& mesh_;
+  const ScreenSegment& s_;
+  float u0_, v0_;  // the segment's start on the lattice of pixel centres
+  // Where the segment is inside its own pixel, and how far past it a hit is taken.
+  float own_lo_ = 2.0f, own_hi_ = 2.0f, past_own_;
+};
 
 }  // namespace
 
@@ -181,7 +236,7 @@ int march_segment(const DepthMesh& mesh, const ScreenSegment& s, int max_steps, 
                   int self_x, int self_y) {
   const float length_px = std::max(std::fabs(s.dx), std::fabs(s.dy)) * (s.f_hi - s.f_lo);
   return length_px <= static_cast<float>(max_steps)
-             ? walk_exact(mesh, s, self_x, self_y)
+             ? ExactWalk(mesh, s, self_x, self_y).run()
              : march_sampled(mesh, s, max_steps, jitter, self_x, self_y);
 }
 

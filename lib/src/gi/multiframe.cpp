@@ -91,6 +91,7 @@ struct View {
       : trace(&t), mesh(t.grid.depth, t.grid.thickness) {
     const TraceGrid& g = t.grid;
     if (grazing) mesh.join_tangent_neighbours(g.depth, g.normal, g.fx, g.fy, g.cx, g.cy);
+    mesh.bound_quads();
     if (own_light) light = hit_light(t, *own_light);
   }
 

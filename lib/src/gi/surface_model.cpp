@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "parallel.h"
 
@@ -94,6 +95,44 @@ DepthMesh::DepthMesh(const Image& depth, const Image& thickness)
     set_triangles(j, [&](std::size_t p, std::size_t q) {
       return connected(z[p], static_cast<int>(p), z[q], static_cast<int>(q));
     });
+  });
+}
+
+void DepthMesh::bound_quads() {
+  const float inf = std::numeric_limits<float>::infinity();
+  quad_front_.assign(inverse_depth_.size(), -inf);
+  quad_back_.assign(inverse_depth_.size(), inf);
+  parallel_for_rows(height_ - 1, [&](int j) {
+    for (int i = 0; i + 1 < width_; ++i) {
+      const std::size_t a = static_cast<std::size_t>(j) * width_ + i, c = a + width_ + 1;
+      const std::uint8_t t = triangles_[a];
+      if (!t) continue;
+      // The corners of the triangles there: both ends of the diagonal, and each one's third.
+      float front = std::max(inverse_depth_[a], inverse_depth_[c]);
+      float back = std::min(inverse_back_[a], inverse_back_[c]);
+      for (const std::size_t third : {a + 1, a + width_}) {
+        if (!(t & (third == a + 1 ? kUpper : kLower))) continue;
+        front = std::max(front, inverse_depth_[third]);
+        back = std::min(back, inverse_back_[third]);
+      }
+      quad_front_[a] = front;
+      quad_back_[a] = back;
+    }
+  });
+  tiles_x_ = (width_ - 1 + kTile - 1) / kTile;
+  tiles_y_ = (height_ - 1 + kTile - 1) / kTile;
+  tile_front_.assign(static_cast<std::size_t>(tiles_x_) * tiles_y_, -inf);
+  tile_back_.assign(tile_front_.size(), inf);
+  parallel_for_rows(tiles_y_, [&](int tj) {
+    for (int ti = 0; ti < tiles_x_; ++ti) {
+      const std::size_t t = static_cast<std::size_t>(tj) * tiles_x_ + ti;
+      for (int j = tj * kTile; j < std::min((tj + 1) * kTile, height_ - 1); ++j)
+        for (int i = ti * kTile; i < std::min((ti + 1) * kTile, width_ - 1); ++i) {
+          const std::size_t q = static_cast<std::size_t>(j) * width_ + i;
+          tile_front_[t] = std::max(tile_front_[t], quad_front_[q]);
+          tile_back_[t] = std::min(tile_back_[t], quad_back_[q]);
+        }
+    }
   });
 }
 

@@ -31,6 +31,7 @@
 // misjudge the chamfers the mesh puts across concave corners.)
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -121,6 +122,51 @@ class DepthMesh {
   void join_tangent_neighbours(const Image& depth, const Image& normal, float fx, float fy,
                                float cx, float cy);
 
+  // Keeps the bounds clear_of, tile_clear_of and in_front_at read, per quad and per tile of
+  // kTile x kTile quads: for meshes that many rays walk (the views' and the other frames' in
+  // multiframe.h), which rarely meet most of what they cross. Again after the triangles change.
+  void bound_quads();
+  bool bounded() const { return !quad_front_.empty(); }
+  static constexpr int kTile = 4;
+
+  // Whether a ray whose inverse depth runs from ha to hb over quad (i, j) (pixel centres (i, j)
+  // .. (i+1, j+1)) meets no slab there: it lies in front of all its triangles' corners, or
+  // behind all their slabs' backs, by more than rounding (a triangle's points lie between its
+  // corners). False without bound_quads.
+  bool clear_of(int i, int j, float ha, float hb) const {
+    if (!bounded()) return false;
+    if (i < 0 || j < 0 || i + 1 >= width_ || j + 1 >= height_) return true;
+    const std::size_t q = static_cast<std::size_t>(j) * width_ + i;
+    return clear(quad_front_[q], quad_back_[q], ha, hb);
+  }
+
+  // The same for every quad of tile (ti, tj): quads kTile ti .. kTile ti + kTile - 1 across,
+  // likewise down.
+  bool tile_clear_of(int ti, int tj, float ha, float hb) const {
+    if (!bounded()) return false;
+    if (ti < 0 || tj < 0 || ti >= tiles_x_ || tj >= tiles_y_) return true;
+    const std::size_t t = static_cast<std::size_t>(tj) * tiles_x_ + ti;
+    return clear(tile_front_[t], tile_back_[t], ha, hb);
+  }
+
+  // Whether a point at inverse depth h at (sx, sy) (as surface_at) lies in front of every corner
+  // of the quad there by more than rounding, so that a surface surface_at finds there lies
+  // behind it; *covered then says whether surface_at finds one. False without bound_quads.
+  bool in_front_at(float sx, float sy, float h, bool* covered) const {
+    if (!bounded()) return false;
+    const float u = sx - 0.5f, v = sy - 0.5f;
+    const float fi = std::floor(u), fj = std::floor(v);
+    const int i = static_cast<int>(fi), j = static_cast<int>(fj);
+    if (i < 0 || j < 0 || i + 1 >= width_ || j + 1 >= height_) {
+      *covered = false;
+      return true;
+    }
+    if (!(h > quad_front_[static_cast<std::size_t>(j) * width_ + i] * (1.0f + kClearMargin)))
+      return false;
+    *covered = has_triangle(i, j, u - fi >= v - fj);
+    return true;
+  }
+
   // Whether points at depths z0 and z1 of vertices p0 and p1 belong to one continuous surface:
   // each lies within the other's slab.
   bool connected(float z0, int p0, float z1, int p1) const {
@@ -175,6 +221,16 @@ class DepthMesh {
   std::vector<float> inverse_depth_;     // 1/z per pixel
   std::vector<float> inverse_back_;      // 1/(z (1 + thickness)) per pixel
   std::vector<std::uint8_t> triangles_;  // per quad (top-left pixel index): kUpper | kLower
+  // Relative to an inverse depth, more than the rounding of a barycentric interpolation.
+  static constexpr float kClearMargin = 1e-5f;
+  static bool clear(float front, float back, float ha, float hb) {
+    return std::min(ha, hb) > front * (1.0f + kClearMargin) ||
+           std::max(ha, hb) < back * (1.0f - kClearMargin);
+  }
+  // Per quad and per tile (bound_quads): its triangles' corners' largest 1/z and smallest
+  // 1/back; where there is no triangle, clear at any depth (-inf, +inf).
+  std::vector<float> quad_front_, quad_back_, tile_front_, tile_back_;
+  int tiles_x_ = 0, tiles_y_ = 0;
 };
 
 }  // namespace ssgi::detail
