@@ -1,6 +1,7 @@
 #include "gi/multiframe.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <limits>
@@ -168,33 +169,55 @@ float leaves_view(const TraceGrid& g, const Imath::V3f& o, const Imath::V3f& d, 
   return t;
 }
 
-// Where camera-space ray (o, d), from parameter t_from on, enters the view of trace grid `g`
-// (its pyramid of sight beyond kNearFraction x `scale`, up to where march_in ends it): the
-// infinite float when it never does.
-float enters_view(const TraceGrid& g, const Imath::V3f& o, const Imath::V3f& d, float t_from,
-                  float scale, const GiSettings& settings) {
-  const float inf = std::numeric_limits<float>::infinity();
-  float lo = t_from;
-  float hi =
-      settings.max_distance > 0 ? static_cast<float>(settings.max_distance) : kFarFactor * scale;
-  // Each side as a x p + b >= 0 inside the view.
-  auto side = [&](float ax, float ay, float az, float b) {
-    const float at = ax * o.x + ay * o.y + az * o.z + b, slope = ax * d.x + ay * d.y + az * d.z;
-    if (slope > 0)
-      lo = std::max(lo, -at / slope);
-    else if (slope < 0)
-      hi = std::min(hi, at / -slope);
-    else if (at < 0)
-      hi = -inf;
-  };
-  const float w = static_cast<float>(g.width), h = static_cast<float>(g.height);
-  side(g.fx, 0, g.cx, 0);
-  side(-g.fx, 0, w - g.cx, 0);
-  side(0, -g.fy, g.cy, 0);
-  side(0, g.fy, h - g.cy, 0);
-  side(0, 0, 1, -kNearFraction * scale);
-  return lo < hi ? lo : inf;
-}
+// The view of trace grid `g` (its pyramid of sight) as half-spaces of another camera's space,
+// `to_view` carrying that space into the view's: side k holds the points p with side[k] . p +
+// offset[k] >= 0; side 4, the near plane, also needs kNearFraction x the ray's scale taken off.
+struct Frustum {
+  Imath::V3f side[5];
+  float offset[5];
+
+  Frustum(const TraceGrid& g, const Rigid& to_view) {
+    const float w = static_cast<float>(g.width), h = static_cast<float>(g.height);
+    // In the view's space (sx >= 0, sx <= width, sy >= 0, sy <= height, z >= 0).
+    const Imath::V3f in_view[5] = {
+        {g.fx, 0, g.cx}, {-g.fx, 0, w - g.cx}, {0, -g.fy, g.cy}, {0, g.fy, h - g.cy}, {0, 0, 1}};
+    // a . (p R + t) = (R a) . p + a . t (row vectors).
+    for (int k = 0; k < 5; ++k) {
+      const Imath::V3f& a = in_view[k];
+      const Imath::M33f& r = to_view.rotation;
+      side[k] = {r[0][0] * a.x + r[0][1] * a.y + r[0][2] * a.z,
+                 r[1][0] * a.x + r[1][1] * a.y + r[1][2] * a.z,
+                 r[2][0] * a.x + r[2][1] * a.y + r[2][2] * a.z};
+      offset[k] = a.dot(to_view.translation);
+    }
+  }
+
+  // Each side's value at point o (the origin of a trace sample's rays, at depth `scale` in the
+  // frame it started from).
+  std::array<float, 5> at(const Imath::V3f& o, float scale) const {
+    std::array<float, 5> v;
+    for (int k = 0; k < 5; ++k) v[k] = side[k].dot(o) + offset[k];
+    v[4] -= kNearFraction * scale;
+    return v;
+  }
+
+  // Where ray (o, d), with its origin's side values `at`, from parameter t_from on, enters the
+  // view (up to where march_in ends it, `t_end`): the infinite float when it never does.
+  float enters(const std::array<float, 5>& at, const Imath::V3f& d, float t_from,
+               float t_end) const {
+    float lo = t_from, hi = t_end;
+    for (int k = 0; k < 5; ++k) {
+      const float slope = side[k].dot(d);
+      if (slope > 0)
+        lo = std::max(lo, -at[k] / slope);
+      else if (slope < 0)
+        hi = std::min(hi, at[k] / -slope);
+      else if (at[k] < 0)
+        return std::numeric_limits<float>::infinity();
+    }
+    return lo < hi ? lo : std::numeric_limits<float>::infinity();
+  }
+};
 
 // Walks row `by` of `self`'s trace grid: for each missed ray of each sample, `ray_body(s, o, ray,
 // jitter, t_from, &found)` with the sample, the rays' camera-space origin, the ray, its march
@@ -358,6 +381,9 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
   r.views = static_cast<int>(neighbours.size());
   if (neighbours.empty() || self.missed.rays.empty()) return false;
   const View& own = all.front();
+  std::vector<Frustum> frusta;
+  for (const Neighbour& n : neighbours) frusta.emplace_back(n.view->trace->grid, n.from_center);
+  const std::size_t count = neighbours.size();
   const TraceGrid& grid = self.grid;
   WeightedHits& hits = self.hits;
   if (hits.foreign.empty()) hits.foreign = Image(grid.width, grid.height, 3);
@@ -370,12 +396,19 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
   std::atomic<std::size_t> rays{0}, found{0}, refused{0};
   struct Entering {
     float t;
-    const Neighbour* n;
+    std::size_t n;
   };
   parallel_for_rows(grid.height, [&](int by) {
     std::size_t row_rays = 0, row_found = 0, row_refused = 0;
     std::vector<Entering> entering;
-    entering.reserve(neighbours.size());
+    entering.reserve(count);
+    // What the rays of one trace sample share, per view: their origin in its space and the
+    // values of its frustum's sides there.
+    std::size_t sample = ~std::size_t{0};
+    std::vector<Imath::V3f> origin_in(count);
+    std::vector<std::array<float, 5>> sides_at(count);
+    const float t_end =
+        settings.max_distance > 0 ? static_cast<float>(settings.max_distance) : kFarFactor;
     walk_missed_rays(
         self, by, settings, &hits.foreign, &hits.env, &hits.cube, &hits.miss,
         [&](std::size_t s, const Imath::V3f& o, const MissedRay& ray, float jitter, float t_from,
@@ -391,20 +424,27 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
             // shows lies within the part of the ray inside its frustum, so once the nearest found
             // is nearer than where the ray enters the next view, that view cannot show a nearer one
             // (the six faces of a cube are each entered after the last is left).
-            entering.clear();
-            for (const Neighbour& n : neighbours) {
-              const float t_in =
-                  enters_view(n.view->trace->grid, n.from_center.point(o),
-                              n.from_center.direction(ray.direction), t_from, o.z, settings);
-              if (!std::isinf(t_in)) entering.push_back({t_in, &n});
+            if (s != sample) {
+              sample = s;
+              for (std::size_t i = 0; i < count; ++i) {
+                origin_in[i] = neighbours[i].from_center.point(o);
+                sides_at[i] = frusta[i].at(o, o.z);
+              }
             }
+            entering.clear();
+            const float end = settings.max_distance > 0 ? t_end : t_end * o.z;
+            for (std::size_t i = 0; i < count; ++i) {
+              const float t_in = frusta[i].enters(sides_at[i], ray.direction, t_from, end);
+              if (!std::isinf(t_in)) entering.push_back({t_in, i});
+            }
+            // By where the ray enters, the views in their given order where that is the same.
             std::sort(entering.begin(), entering.end(), [](const Entering& a, const Entering& b) {
-              return a.t < b.t || (a.t == b.t && a.n->index < b.n->index);
+              return a.t < b.t || (a.t == b.t && a.n < b.n);
             });
             for (const Entering& e : entering) {
               if (e.t >= best_along) break;
-              const Neighbour& n = *e.n;
-              const Imath::V3f on = n.from_center.point(o);
+              const Neighbour& n = neighbours[e.n];
+              const Imath::V3f& on = origin_in[e.n];
               const Imath::V3f dn = n.from_center.direction(ray.direction);
               const std::int32_t hit = march_in(*n.view, on, dn, t_from, o.z, jitter, settings);
               if (hit < 0) continue;
