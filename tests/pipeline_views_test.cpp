@@ -12,6 +12,12 @@
 #include <vector>
 
 #include "frame_stages.h"
+#include "gi/composite.h"
+#include "gi/misses.h"
+#include "gi/multiframe.h"
+#include "gi/slices.h"
+#include "gi/surface_model.h"
+#include "gi/trace_grid.h"
 #include "gtest/gtest.h"
 #include "io/views.h"
 #include "pipeline_support.h"
@@ -236,6 +242,72 @@ TEST(Views, LatLongFacesAreTheCubeFacesOfItsCamera) {
         EXPECT_NEAR(a.camera.world_to_camera[i][j], b.camera.world_to_camera[i][j], 1e-12)
             << "face " << f;
   }
+}
+
+// Where a missed ray passes behind what the frame shows, the slice tracer records (MissedRay::
+// hidden), and the views take the ray on from there. The front wall with a bar across the frame
+// before it (a band of rows at half its depth): rays from the wall below the bar, heading up
+// towards the camera, pass behind the bar's slab and are hidden there; rays that pass in front
+// of it leave the frame seen free. A dense walk through the frame's mesh is the judge: at the
+// recorded parameter the ray is still free, and after it, before it leaves the frame, it passes
+// behind a slab; a ray recorded as never hidden does not.
+TEST(Views, MissedRaysKnowWhereTheyPassBehindWhatTheFrameShows) {
+  const GiSettings s = view_settings();
+  Shot shot(s);
+  GBuffer& g = shot.f.g;
+  const int w = g.width(), h = g.height();
+  for (int y = 2 * h / 5; y < 11 * h / 20; ++y)
+    for (int x = 0; x < w; ++x) g.depth.at(0, x, y) = static_cast<float>(kFront / 2);
+  const detail::TraceGrid grid = detail::make_trace_grid(g, detail::reflected_radiance(g, false), 1,
+                                                         static_cast<float>(s.thickness));
+  const detail::Environment env;
+  const detail::MissModel misses(g, s.miss, env);
+  detail::MissedRays missed;
+  detail::trace_slices(g, grid, s, misses, &missed);
+  const detail::DepthMesh mesh(grid.depth, grid.thickness);
+
+  // Whether camera-space point p lies behind a slab the frame shows; whether ray (o, d) passes
+  // such a point after parameter t0, before it leaves the frame.
+  auto behind_at = [&](const Imath::V3f& p) {
+    if (!(p.z > 0)) return false;
+    const float sx = grid.cx + grid.fx * p.x / p.z, sy = grid.cy - grid.fy * p.y / p.z;
+    detail::MeshPoint surface;
+    return mesh.surface_at(sx, sy, &surface) && p.z > surface.back_z * (1.0f + 1e-4f);
+  };
+  auto passes_behind = [&](const Imath::V3f& o, const Imath::V3f& d, float t0) {
+    const float t_end = d.z < 0 ? 0.999f * o.z / -d.z : 1e3f * o.z;
+    constexpr int kSteps = 4000;
+    for (int k = 1; k <= kSteps; ++k) {
+      const Imath::V3f p = o + (t0 + (t_end - t0) * k / kSteps) * d;
+      const float sx = grid.cx + grid.fx * p.x / p.z, sy = grid.cy - grid.fy * p.y / p.z;
+      if (!(p.z > 0) || sx < 0 || sy < 0 || sx >= grid.width || sy >= grid.height) return false;
+      if (behind_at(p)) return true;
+    }
+    return false;
+  };
+  int hidden = 0, free_there = 0, behind_after = 0, seen_free = 0, free_all_along = 0;
+  for (std::size_t sample = 0; sample < grid.origin.size(); ++sample) {
+    const Imath::V3f& o = missed.origin[sample];
+    for (std::uint32_t k = missed.begin[sample]; k < missed.begin[sample + 1]; ++k) {
+      const detail::MissedRay& ray = missed.rays[k];
+      if (std::isinf(ray.hidden)) {
+        ++seen_free;
+        free_all_along += !passes_behind(o, ray.direction, 0.0f);
+        continue;
+      }
+      ++hidden;
+      free_there += !behind_at(o + ray.hidden * ray.direction);
+      behind_after += passes_behind(o, ray.direction, ray.hidden);
+    }
+  }
+  std::printf(
+      "%d rays hidden: %d free there, %d pass behind after; %d seen free: %d free all along\n",
+      hidden, free_there, behind_after, seen_free, free_all_along);
+  ASSERT_GT(hidden, 500);
+  ASSERT_GT(seen_free, 500);
+  EXPECT_GE(free_there, hidden * 99 / 100);
+  EXPECT_GE(behind_after, hidden * 95 / 100);
+  EXPECT_GE(free_all_along, seen_free * 95 / 100);
 }
 
 }  // namespace
