@@ -401,7 +401,7 @@ std::vector<MeshTexel> random_mesh(std::mt19937& rng, int w, int h) {
 TEST_P(SimdTarget, MarchSideMatchesTheScalarTwinBitForBit) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-  std::size_t bits_set = 0, bridged = 0, samples = 0;
+  std::size_t bits_set = 0, bridged = 0, samples = 0, bounded_backs = 0;
   for (auto [w, h] :
        {std::pair{37, 23}, std::pair{64, 64}, std::pair{1, 9}, std::pair{9, 1}, std::pair{2, 2}}) {
     const std::vector<MeshTexel> texels = random_mesh(rng, w, h);
@@ -425,6 +425,9 @@ TEST_P(SimdTarget, MarchSideMatchesTheScalarTwinBitForBit) {
         const int n_simd = march_side(mesh, f, m, &simd);
         const int n_scalar = march_side_scalar(mesh, f, m, &scalar);
         ASSERT_EQ(n_simd, n_scalar) << w << "x" << h << " trial " << trial << " steps " << steps;
+        ASSERT_EQ(simd.beyond_above, scalar.beyond_above) << trial << " " << steps;
+        ASSERT_EQ(simd.beyond_below, scalar.beyond_below) << trial << " " << steps;
+        bounded_backs += std::isfinite(scalar.beyond_above) + std::isfinite(scalar.beyond_below);
         for (int j = 0; j < n_scalar; ++j) {
           ASSERT_EQ(simd.pixel[j + 1], scalar.pixel[j + 1]) << trial << " " << steps << " " << j;
           ASSERT_EQ(simd.bits[j], scalar.bits[j]) << trial << " " << steps << " " << j;
@@ -445,6 +448,7 @@ TEST_P(SimdTarget, MarchSideMatchesTheScalarTwinBitForBit) {
   EXPECT_GT(samples, 2000u);
   EXPECT_GT(bits_set, 1000u);
   EXPECT_GT(bridged, 500u);
+  EXPECT_GT(bounded_backs, 300u);
 }
 
 TEST_P(SimdTarget, CollectHitsMatchesTheScalarTwinBitForBit) {

@@ -100,7 +100,8 @@ class ExactWalk {
  public:
   ExactWalk(const DepthMesh& mesh, const ScreenSegment& s, int self_x, int self_y)
       : mesh_(mesh), s_(s), u0_(s.sx0 - 0.5f), v0_(s.sy0 - 0.5f) {
-    clip_to_box(s, self_x, self_y, self_x + 1.0f, self_y + 1.0f, &own_lo_, &own_hi_);
+    if (self_x >= 0 && self_y >= 0)
+      clip_to_box(s, self_x, self_y, self_x + 1.0f, self_y + 1.0f, &own_lo_, &own_hi_);
     past_own_ = kPastEdgePx / std::max(std::fabs(s.dx), std::fabs(s.dy));
   }
 

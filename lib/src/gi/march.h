@@ -36,8 +36,8 @@ struct ScreenSegment {
 bool clip_to_window(ScreenSegment* s, float width, float height);
 
 // The pixel whose light the segment's first hit on `mesh` brings, or -1, never pixel (self_x,
-// self_y) (the ray's own). A segment up to `max_steps` pixels long walks every triangle it
-// crosses and solves where it enters a slab (the surface model itself, which the Embree
+// self_y) (the ray's own; -1, -1 for none). A segment up to `max_steps` pixels long walks every
+// triangle it crosses and solves where it enters a slab (the surface model itself, which the Embree
 // reference traces too); a longer one samples `max_steps` evenly spaced points, offset by
 // `jitter` in [0, 1) of a step, and can step over a thin slab.
 int march_segment(const DepthMesh& mesh, const ScreenSegment& s, int max_steps, float jitter,

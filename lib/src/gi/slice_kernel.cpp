@@ -114,7 +114,10 @@ int MarchSide(const MeshView& mesh, const SliceFrame& f, const SideMarch& m, Sid
   out->z[0] = out->x[0] = out->y[0] = out->nx[0] = out->ny[0] = out->nz[0] = 0.0f;
   out->front_u[0] = out->back_u[0] = out->thickness[0] = 0.0f;
 
-  // The samples: where each meets the mesh, and its slab's sector coordinates.
+  // The samples: where each meets the mesh, and its slab's sector coordinates (and their
+  // extremes, bound_backs).
+  const VF inf = hn::Set(d, std::numeric_limits<float>::infinity());
+  VF above = inf, below = hn::Neg(inf);
   for (int j = 0; j < padded; j += lanes) {
     const VF step = hn::Add(hn::Iota(d, 0.0f), hn::Set(d, static_cast<float>(j)));
     const VF frac = hn::Mul(hn::Add(step, hn::Set(d, m.u_step)), inv_steps);
@@ -195,11 +198,16 @@ int MarchSide(const MeshView& mesh, const SliceFrame& f, const SideMarch& m, Sid
     hn::StoreU(ny, d, out->ny.data() + at);
     hn::StoreU(nz, d, out->nz.data() + at);
     hn::StoreU(thick, d, out->thickness.data() + at);
-    hn::StoreU(SectorCoordinate(d, f, wx, wy, wz), d, out->front_u.data() + at);
-    hn::StoreU(
+    const VF front_u = SectorCoordinate(d, f, wx, wy, wz);
+    const VF back_u =
         SectorCoordinate(d, f, hn::Sub(hn::Mul(back_scale, x), ox),
-                         hn::Sub(hn::Mul(back_scale, y), oy), hn::Sub(hn::Mul(back_scale, z), oz)),
-        d, out->back_u.data() + at);
+                         hn::Sub(hn::Mul(back_scale, y), oy), hn::Sub(hn::Mul(back_scale, z), oz));
+    hn::StoreU(front_u, d, out->front_u.data() + at);
+    hn::StoreU(back_u, d, out->back_u.data() + at);
+    const auto valid = hn::RebindMask(d, valid_i);
+    above = hn::Min(above, hn::IfThenElse(hn::And(valid, hn::Gt(back_u, front_u)), back_u, inf));
+    below = hn::Max(below,
+                    hn::IfThenElse(hn::And(valid, hn::Lt(back_u, front_u)), back_u, hn::Neg(inf)));
     if (m.max_distance2 > 0)
       hn::StoreU(hn::Add(hn::Add(hn::Mul(wx, wx), hn::Mul(wy, wy)), hn::Mul(wz, wz)), d,
                  out->distance2.data() + at);
@@ -241,10 +249,20 @@ int MarchSide(const MeshView& mesh, const SliceFrame& f, const SideMarch& m, Sid
     hn::StoreU(hn::IfThenElseZero(hn::RebindMask(du, valid), SectorBits(d, lo2, hi2)), du,
                out->bits.data() + j);
   }
-  if (!(m.max_distance2 > 0)) return m.steps;
-  for (int j = 0; j < m.steps; ++j)
-    if (out->pixel[j + 1] >= 0 && out->distance2[j + 1] > m.max_distance2) return j;
-  return m.steps;
+  int end = m.steps;
+  if (m.max_distance2 > 0)
+    for (int j = 0; j < m.steps; ++j)
+      if (out->pixel[j + 1] >= 0 && out->distance2[j + 1] > m.max_distance2) {
+        end = j;
+        break;
+      }
+  if (end == m.steps) {
+    out->beyond_above = hn::GetLane(hn::MinOfLanes(d, above));
+    out->beyond_below = hn::GetLane(hn::MaxOfLanes(d, below));
+  } else {
+    bound_backs(out, end);
+  }
+  return end;
 }
 
 int CollectHits(const SideSamples& samples, int count, float sector_weight, std::uint32_t* mask,
@@ -359,6 +377,7 @@ int march_side_scalar(const MeshView& mesh, const SliceFrame& f, const SideMarch
     before_n[0] = n[0], before_n[1] = n[1], before_n[2] = n[2];
     before_lo = own_lo, before_hi = own_hi;
   }
+  bound_backs(out, end);
   return end;
 }
 

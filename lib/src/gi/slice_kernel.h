@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "gi/surface_model.h"
@@ -121,9 +122,26 @@ struct SideSamples {
   std::vector<float> x, y, z, nx, ny, nz, thickness, front_u, back_u, distance2;
   std::vector<std::int32_t> pixel;
   std::vector<std::uint32_t> bits;
+  // Over the steps taken: the least back coordinate of the slabs whose back lies above their
+  // front, and the greatest of those whose back lies below (+inf, -inf when none). A ray whose
+  // sector coordinate lies above neither and below neither passes behind none of the slabs.
+  float beyond_above = 0, beyond_below = 0;
   // Room for `steps` steps on any SIMD target.
   void reserve(int steps);
 };
+
+// Sets samples->beyond_above and beyond_below over the first `count` steps.
+inline void bound_backs(SideSamples* samples, int count) {
+  float above = std::numeric_limits<float>::infinity(), below = -above;
+  for (int j = 0; j < count; ++j) {
+    if (samples->pixel[j + 1] < 0) continue;
+    const float front = samples->front_u[j + 1], back = samples->back_u[j + 1];
+    if (back > front) above = std::min(above, back);
+    if (back < front) below = std::max(below, back);
+  }
+  samples->beyond_above = above;
+  samples->beyond_below = below;
+}
 
 // Marches one side of the slice `f` over the mesh: returns the number of steps to use (all of
 // them, or up to the first sample beyond the maximum distance) with out->bits and out->pixel
