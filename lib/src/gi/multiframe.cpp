@@ -87,12 +87,13 @@ struct View {
   std::vector<std::array<float, 3>> light;
 
   // `own_light` null: the light of one bounce (what the surfaces reflect, their backs nothing).
-  // A view's (`grazing`) mesh also joins neighbours on one plane seen at a grazing angle.
-  View(const FrameTrace& t, const Image* own_light, bool grazing = false)
+  // A view's (`grazing`) mesh also joins neighbours on one plane seen at a grazing angle. Rays
+  // are marched in a `marched` one (its mesh bounded); the centre's own is only looked at.
+  View(const FrameTrace& t, const Image* own_light, bool grazing, bool marched)
       : trace(&t), mesh(t.grid.depth, t.grid.thickness) {
     const TraceGrid& g = t.grid;
     if (grazing) mesh.join_tangent_neighbours(g.depth, g.normal, g.fx, g.fy, g.cx, g.cy);
-    mesh.bound_quads();
+    if (marched) mesh.bound_quads();
     if (own_light) light = hit_light(t, *own_light);
   }
 
@@ -370,11 +371,11 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
   if (!self.camera.has_world_transform) return false;
   std::vector<View> all;
   all.reserve(views.size() + 1);
-  all.emplace_back(self, nullptr);  // the frame's own view only tells what it sees
+  all.emplace_back(self, nullptr, false, false);  // the frame's own only tells what it sees
   std::vector<Neighbour> neighbours;
   for (std::size_t i = 0; i < views.size(); ++i) {
     if (!views[i]->camera.has_world_transform) continue;
-    all.emplace_back(*views[i], settings.bounces > 1 ? light[i] : nullptr, true);
+    all.emplace_back(*views[i], settings.bounces > 1 ? light[i] : nullptr, true, true);
     neighbours.push_back({&all.back(), between(self.camera, views[i]->camera),
                           between(views[i]->camera, self.camera), static_cast<std::uint32_t>(i)});
   }
@@ -568,10 +569,10 @@ bool continue_rays(const std::vector<const FrameTrace*>& frames,
   std::vector<View> views;
   views.reserve(order.size() + 1);
   // The centre's own view only tells what it sees: its light is not read.
-  views.emplace_back(self, nullptr);
+  views.emplace_back(self, nullptr, false, false);
   std::vector<Neighbour> neighbours;
   for (int i : order) {
-    views.emplace_back(*frames[i], settings.bounces > 1 ? light[i] : nullptr);
+    views.emplace_back(*frames[i], settings.bounces > 1 ? light[i] : nullptr, false, true);
     neighbours.push_back({&views.back(), between(self.camera, frames[i]->camera),
                           between(frames[i]->camera, self.camera)});
   }
