@@ -132,7 +132,7 @@ Image FrameStages::trace(const GBuffer& g, GBuffer* grid_out, Image* coverage,
       lights.push_back(&views->light[i]);
     }
     ViewsReport report;
-    continue_in_views(t.get(), traces, lights, s, &report);
+    continue_in_views(t.get(), traces, lights, s, keep != nullptr, &report);
     log_info(report.describe(g.frame));
     Image light = gather_bounces(t->grid, t->hits, s.bounces, misses, coverage, cube);
     if (shares) *shares = t->hits.cube;
@@ -191,7 +191,8 @@ LitViews FrameStages::light_views(const std::vector<GBuffer>& views) const {
       }
       FrameTrace& t = *out.traces[i];
       if (pass == 0)
-        continued[i] = continue_in_views(&t, others[i], lights, settings_, nullptr, &found[i]);
+        continued[i] =
+            continue_in_views(&t, others[i], lights, settings_, false, nullptr, &found[i]);
       else if (continued[i])
         t.hits.foreign = view_light(t, found[i], others[i], lights, settings_);
       again[i] = continued[i]

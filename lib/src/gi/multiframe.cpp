@@ -363,7 +363,7 @@ std::string ViewsReport::describe(int frame) const {
 
 bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrace*>& views,
                        const std::vector<const Image*>& light, const GiSettings& settings,
-                       ViewsReport* report, ViewHits* found_rays) {
+                       bool keep_missed, ViewsReport* report, ViewHits* found_rays) {
   FrameTrace& self = *self_trace;
   ViewsReport local;
   ViewsReport& r = report ? *report : local;
@@ -389,8 +389,8 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
   WeightedHits& hits = self.hits;
   if (hits.foreign.empty()) hits.foreign = Image(grid.width, grid.height, 3);
   // The rays still missed, row by row, for the shot's other frames to continue (multiframe).
-  std::vector<std::vector<MissedRay>> row_left(static_cast<std::size_t>(grid.height));
-  std::vector<std::uint32_t> left_count(grid.origin.size(), 0);
+  std::vector<std::vector<MissedRay>> row_left(keep_missed ? grid.height : 0);
+  std::vector<std::uint32_t> left_count(keep_missed ? grid.origin.size() : 0, 0);
   // The found rays, row by row, when asked for.
   std::vector<std::vector<ViewHit>> found_by_row(found_rays ? grid.height : 0);
   std::vector<std::uint32_t> found_count(found_rays ? grid.origin.size() : 0, 0);
@@ -462,8 +462,10 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
           }
           if (!best) {
             if (was_refused) ++row_refused;
-            row_left[by].push_back(ray);
-            ++left_count[s];
+            if (keep_missed) {
+              row_left[by].push_back(ray);
+              ++left_count[s];
+            }
             return;
           }
           add_hit_light(*best->view->trace, best->view->light, best_hit, ray.weight,
@@ -483,25 +485,29 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
   r.rays = rays;
   r.found = found;
   r.refused = refused;
-  // The rays left, in trace-sample order.
-  std::vector<std::uint32_t> row_start(static_cast<std::size_t>(grid.height) + 1, 0);
-  for (int by = 0; by < grid.height; ++by)
-    row_start[by + 1] = row_start[by] + static_cast<std::uint32_t>(row_left[by].size());
-  MissedRays left;
-  left.origin = std::move(self.missed.origin);
-  left.begin.resize(grid.origin.size() + 1);
-  left.rays.resize(row_start.back());
-  parallel_for_rows(grid.height, [&](int by) {
-    std::uint32_t at = row_start[by];
-    for (int bx = 0; bx < grid.width; ++bx) {
-      const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
-      left.begin[s] = at;
-      at += left_count[s];
-    }
-    std::copy(row_left[by].begin(), row_left[by].end(), left.rays.begin() + row_start[by]);
-  });
-  left.begin.back() = row_start.back();
-  self.missed = std::move(left);
+  if (!keep_missed) {
+    self.missed = MissedRays();
+  } else {
+    // The rays left, in trace-sample order.
+    std::vector<std::uint32_t> row_start(static_cast<std::size_t>(grid.height) + 1, 0);
+    for (int by = 0; by < grid.height; ++by)
+      row_start[by + 1] = row_start[by] + static_cast<std::uint32_t>(row_left[by].size());
+    MissedRays left;
+    left.origin = std::move(self.missed.origin);
+    left.begin.resize(grid.origin.size() + 1);
+    left.rays.resize(row_start.back());
+    parallel_for_rows(grid.height, [&](int by) {
+      std::uint32_t at = row_start[by];
+      for (int bx = 0; bx < grid.width; ++bx) {
+        const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
+        left.begin[s] = at;
+        at += left_count[s];
+      }
+      std::copy(row_left[by].begin(), row_left[by].end(), left.rays.begin() + row_start[by]);
+    });
+    left.begin.back() = row_start.back();
+    self.missed = std::move(left);
+  }
   if (found_rays) {
     std::vector<std::uint32_t> found_start(static_cast<std::size_t>(grid.height) + 1, 0);
     for (int by = 0; by < grid.height; ++by)

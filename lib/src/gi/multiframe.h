@@ -94,12 +94,12 @@ struct ViewsReport {
 // The surface brings what it reflects plus its albedo x the view's own indirect light
 // (`light`: per view, on its trace grid; unread for --bounces 1), as continue_rays' neighbours
 // do. Into self->hits: that light per trace sample in `foreign` (added), the found rays' shares
-// taken out of miss, env and cube; self->missed keeps only the rays still missed, for the shot's
-// other frames to continue. A view's mesh also joins neighbours that lie on one plane seen at a
-// grazing angle (DepthMesh::join_tangent_neighbours): a view's few pixels see much of the scene
-// so. True when a ray met a surface; nothing changes without a world transform for the frame's
-// camera.
-// With `found`, also which view sample each found ray met and its weight, for view_light.
+// taken out of miss, env and cube; with `keep_missed`, self->missed keeps only the rays still
+// missed, for the shot's other frames to continue (else it is emptied). A view's mesh also joins
+// neighbours that lie on one plane seen at a grazing angle (DepthMesh::join_tangent_neighbours): a
+// view's few pixels see much of the scene so. True when a ray met a surface; nothing changes
+// without a world transform for the frame's camera. With `found`, also which view sample each found
+// ray met and its weight, for view_light.
 struct ViewHit {
   std::uint32_t view;  // its index in `views`
   std::int32_t hit;    // a trace sample of it, kSeenFromBehind marked
@@ -111,7 +111,7 @@ struct ViewHits {
 };
 bool continue_in_views(FrameTrace* self, const std::vector<const FrameTrace*>& views,
                        const std::vector<const Image*>& light, const GiSettings& settings,
-                       ViewsReport* report, ViewHits* found = nullptr);
+                       bool keep_missed, ViewsReport* report, ViewHits* found = nullptr);
 
 // The light the rays `found` (continue_in_views, on `self`'s trace grid) bring from the same
 // views with their light `light`: what continue_in_views adds to hits.foreign, for the views'
