@@ -285,7 +285,8 @@ struct SliceTracer {
   // missed sectors in order, cut into kContinuedPerSlice runs of (nearly) equal count, and per
   // run the ray of one of its sectors, drawn at random, weighing the whole run: an unbiased
   // estimate of what the run's rays would find. The ray's angle inverts the slice's measure by
-  // interpolation in a table of it over the half-disc.
+  // interpolation in a table of it over the half-disc; the sides' samples (`marched`) tell where
+  // it passes behind what the frame shows (hidden_from).
   void record_slice_misses(std::uint32_t missed, const SliceMeasure& measure, const Angle& lowest,
                            float h_lo, float to_sector, float u_rot, const Imath::V3f& origin,
                            const Imath::V3f& view, const Imath::V3f& t, float sector_weight,
