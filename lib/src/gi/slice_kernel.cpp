@@ -257,8 +257,17 @@ int MarchSide(const MeshView& mesh, const SliceFrame& f, const SideMarch& m, Sid
         break;
       }
   if (end == m.steps) {
-    out->beyond_above = hn::GetLane(hn::MinOfLanes(d, above));
-    out->beyond_below = hn::GetLane(hn::MaxOfLanes(d, below));
+    // Lane by lane: some targets' MinOfLanes and MaxOfLanes start from the largest finite
+    // float, not from the infinities the scalar twin keeps where no slab counts.
+    float lanes_above[HWY_MAX_BYTES / sizeof(float)], lanes_below[HWY_MAX_BYTES / sizeof(float)];
+    hn::StoreU(above, d, lanes_above);
+    hn::StoreU(below, d, lanes_below);
+    out->beyond_above = std::numeric_limits<float>::infinity();
+    out->beyond_below = -out->beyond_above;
+    for (int k = 0; k < lanes; ++k) {
+      out->beyond_above = std::min(out->beyond_above, lanes_above[k]);
+      out->beyond_below = std::max(out->beyond_below, lanes_below[k]);
+    }
   } else {
     bound_backs(out, end);
   }
