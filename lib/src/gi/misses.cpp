@@ -235,8 +235,7 @@ std::array<float, 3> MissModel::environment(const Imath::V3f& d) const {
   return env_.radiance(d * camera_to_world_);  // row vectors: world = d * M
 }
 
-CubeLight MissModel::cube_light(const TraceGrid& grid, const std::array<float, 4>* light,
-                                std::size_t stride) const {
+CubeLight MissModel::cube_light(const TraceGrid& grid, const std::array<float, 4>* light) const {
   // Sums in double, per row in parallel and then over the rows in order: the same bits for any
   // thread count.
   struct Sums {
@@ -256,7 +255,7 @@ CubeLight MissModel::cube_light(const TraceGrid& grid, const std::array<float, 4
     for (int bx = 0; bx < grid.width; ++bx) {
       const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
       if (grid.origin[s] < 0) continue;
-      const std::array<float, 4>& l = light[stride * s];
+      const std::array<float, 4>& l = light[s];
       const double b = std::max(border[bx], border[grid.width + by]);
       const float nx = grid.normal.plane(0)[s], ny = grid.normal.plane(1)[s],
                   nz = grid.normal.plane(2)[s];

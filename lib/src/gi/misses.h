@@ -114,11 +114,9 @@ class MissModel {
   // The environment's light along camera-space direction `d` (world-space maps rotated).
   std::array<float, 3> environment(const Imath::V3f& d) const;
 
-  // The cube's colours for one bounce: light[stride * s] is trace sample s's light (what it
-  // reflects plus albedo x its indirect light; RGB and one unused float), over the samples with
-  // an origin.
-  CubeLight cube_light(const TraceGrid& grid, const std::array<float, 4>* light,
-                       std::size_t stride) const;
+  // The cube's colours for one bounce: light[s] is trace sample s's light (what it reflects plus
+  // albedo x its indirect light; RGB and one unused float), over the samples with an origin.
+  CubeLight cube_light(const TraceGrid& grid, const std::array<float, 4>* light) const;
 
   // One line for -v: the up axis, the sky share by elevation, where it came from.
   std::string describe() const;
