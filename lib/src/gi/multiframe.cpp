@@ -489,44 +489,19 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
     self.missed = MissedRays();
   } else {
     // The rays left, in trace-sample order.
-    std::vector<std::uint32_t> row_start(static_cast<std::size_t>(grid.height) + 1, 0);
-    for (int by = 0; by < grid.height; ++by)
-      row_start[by + 1] = row_start[by] + static_cast<std::uint32_t>(row_left[by].size());
     MissedRays left;
     left.origin = std::move(self.missed.origin);
-    left.begin.resize(grid.origin.size() + 1);
-    left.rays.resize(row_start.back());
-    parallel_for_rows(grid.height, [&](int by) {
-      std::uint32_t at = row_start[by];
-      for (int bx = 0; bx < grid.width; ++bx) {
-        const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
-        left.begin[s] = at;
-        at += left_count[s];
-      }
-      std::copy(row_left[by].begin(), row_left[by].end(), left.rays.begin() + row_start[by]);
-    });
-    left.begin.back() = row_start.back();
+    join_rows(
+        grid, row_left,
+        [&](int by, int bx) { return left_count[static_cast<std::size_t>(by) * grid.width + bx]; },
+        &left.begin, &left.rays);
     self.missed = std::move(left);
   }
-  if (found_rays) {
-    std::vector<std::uint32_t> found_start(static_cast<std::size_t>(grid.height) + 1, 0);
-    for (int by = 0; by < grid.height; ++by)
-      found_start[by + 1] = found_start[by] + static_cast<std::uint32_t>(found_by_row[by].size());
-    ViewHits& out = *found_rays;
-    out.begin.resize(grid.origin.size() + 1);
-    out.hits.resize(found_start.back());
-    parallel_for_rows(grid.height, [&](int by) {
-      std::uint32_t at = found_start[by];
-      for (int bx = 0; bx < grid.width; ++bx) {
-        const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
-        out.begin[s] = at;
-        at += found_count[s];
-      }
-      std::copy(found_by_row[by].begin(), found_by_row[by].end(),
-                out.hits.begin() + found_start[by]);
-    });
-    out.begin.back() = found_start.back();
-  }
+  if (found_rays)
+    join_rows(
+        grid, found_by_row,
+        [&](int by, int bx) { return found_count[static_cast<std::size_t>(by) * grid.width + bx]; },
+        &found_rays->begin, &found_rays->hits);
   return r.found > 0;
 }
 

@@ -520,43 +520,14 @@ WeightedHits trace_slices(const GBuffer& g, const TraceGrid& grid, const GiSetti
       for (int f = 0; f < kCubeFaces; ++f) hits.cube.plane(f)[s] = cube[f];
     }
   });
-  // Where each row's hits (and missed rays) go, then the rows copied into place side by side.
-  std::vector<std::uint32_t> row_start(static_cast<std::size_t>(grid.height) + 1, 0);
-  std::vector<std::uint32_t> missed_start(row_missed.size() + 1, 0);
-  for (int by = 0; by < grid.height; ++by) {
-    row_start[by + 1] = row_start[by] + static_cast<std::uint32_t>(row_pixels[by].size());
-    if (missed)
-      missed_start[by + 1] = missed_start[by] + static_cast<std::uint32_t>(row_missed[by].size());
-  }
-  hits.pixel.resize(row_start.back());
-  hits.weight.resize(row_start.back());
-  hits.begin.resize(grid.origin.size() + 1);
-  if (missed) {
-    missed->begin.resize(grid.origin.size() + 1);
-    missed->rays.resize(missed_start.back());
-  }
-  parallel_for_rows(grid.height, [&](int by) {
-    std::uint32_t at = row_start[by];
-    for (int bx = 0; bx < grid.width; ++bx) {
-      hits.begin[static_cast<std::size_t>(by) * grid.width + bx] = at;
-      at += row_counts[by][bx];
-    }
-    std::copy(row_pixels[by].begin(), row_pixels[by].end(), hits.pixel.begin() + row_start[by]);
-    std::copy(row_weights[by].begin(), row_weights[by].end(), hits.weight.begin() + row_start[by]);
-    row_pixels[by] = {};
-    row_weights[by] = {};
-    if (!missed) return;
-    at = missed_start[by];
-    for (int bx = 0; bx < grid.width; ++bx) {
-      missed->begin[static_cast<std::size_t>(by) * grid.width + bx] = at;
-      at += row_missed_counts[by][bx];
-    }
-    std::copy(row_missed[by].begin(), row_missed[by].end(),
-              missed->rays.begin() + missed_start[by]);
-    row_missed[by] = {};
-  });
-  hits.begin.back() = row_start.back();
-  if (missed) missed->begin.back() = missed_start.back();
+  join_rows(
+      grid, row_pixels, [&](int by, int bx) { return row_counts[by][bx]; }, &hits.begin,
+      &hits.pixel);
+  join_rows(grid, row_weights, &hits.weight);
+  if (missed)
+    join_rows(
+        grid, row_missed, [&](int by, int bx) { return row_missed_counts[by][bx]; }, &missed->begin,
+        &missed->rays);
   return hits;
 }
 

@@ -6,9 +6,12 @@
 // (its few megabytes stay in cache), not at the frame's.
 #pragma once
 
+#include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
+#include "parallel.h"
 #include "ssgi/gbuffer.h"
 #include "ssgi/image.h"
 
@@ -34,5 +37,39 @@ struct TraceGrid {
 // light the frame's surfaces reflect (composite.h); a block's pixels within `thickness` x depth
 // of its origin's are on its surface.
 TraceGrid make_trace_grid(const GBuffer& g, const Image& reflected, int scale, float thickness);
+
+// Entries the trace samples made row by row in parallel, joined in trace-sample order: row by's
+// entries rows[by] are count(by, bx) for each sample bx of the row, one after the other. `out`
+// gets every row's side by side; `begin`, unless null, each sample's first entry and the total
+// at the end. Each row is freed once copied.
+template <typename Entries, typename Count, typename Begin, typename Out>
+void join_rows(const TraceGrid& grid, std::vector<Entries>& rows, const Count& count, Begin* begin,
+               Out* out) {
+  std::vector<std::uint32_t> row_start(static_cast<std::size_t>(grid.height) + 1, 0);
+  for (int by = 0; by < grid.height; ++by)
+    row_start[by + 1] = row_start[by] + static_cast<std::uint32_t>(rows[by].size());
+  out->resize(row_start.back());
+  if (begin) begin->resize(static_cast<std::size_t>(grid.width) * grid.height + 1);
+  parallel_for_rows(grid.height, [&](int by) {
+    if (begin) {
+      std::uint32_t at = row_start[by];
+      for (int bx = 0; bx < grid.width; ++bx) {
+        (*begin)[static_cast<std::size_t>(by) * grid.width + bx] = at;
+        at += static_cast<std::uint32_t>(count(by, bx));
+      }
+    }
+    std::copy(rows[by].begin(), rows[by].end(), out->begin() + row_start[by]);
+    rows[by] = Entries();
+  });
+  if (begin) begin->back() = row_start.back();
+}
+
+// The same for entries beside others already joined (the same counts): without `begin`.
+template <typename Entries, typename Out>
+void join_rows(const TraceGrid& grid, std::vector<Entries>& rows, Out* out) {
+  join_rows(
+      grid, rows, [](int, int) { return 0; }, static_cast<std::vector<std::uint32_t>*>(nullptr),
+      out);
+}
 
 }  // namespace ssgi::detail
