@@ -267,10 +267,10 @@ struct SliceTracer {
   // side at parameter x is x a / (o.z (o.z + x d.z)).
   float hidden_from(const MarchedSide& side, float u, const Imath::V3f& o,
                     const Imath::V3f& d) const {
-    const float a = fx * (o.z * d.x - o.x * d.z) * side.sx - fy * (o.z * d.y - o.y * d.z) * side.sy;
-    auto parameter = [&](float e) { return e * o.z * o.z / (a - e * o.z * d.z); };
     if (side.count == 0 || (!(u > side.samples->beyond_above) && !(u < side.samples->beyond_below)))
       return std::numeric_limits<float>::infinity();
+    const float a = fx * (o.z * d.x - o.x * d.z) * side.sx - fy * (o.z * d.y - o.y * d.z) * side.sy;
+    auto parameter = [&](float e) { return e * o.z * o.z / (a - e * o.z * d.z); };
     for (int j = 0; j < side.count; ++j) {
       if (side.samples->pixel[j + 1] < 0) continue;
       const float front = side.samples->front_u[j + 1], back = side.samples->back_u[j + 1];
