@@ -13,7 +13,7 @@
 # Prints two markdown tables, each configuration's estimate in parts, and the load average
 # before and after (other work on the machine slows the runs and takes the second thread's
 # core: s/frame is wall time, with the CPU time of ssgi's own beside it). The first run renders
-# the shots (tests/accuracy/training/render.sh; 11 minutes at 1080p and 46 at 4K on the
+# the shots (tests/accuracy/training/render.sh; 11 minutes at 1080p and 46 to 70 at 4K on the
 # two shared cores) into the cache, a folder per resolution; later runs find them there.
 # Usage:
 #   tests/bench/rendered.sh [BUILD_DIR] [ROUNDS]     (default: build 3)
