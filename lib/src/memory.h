@@ -47,7 +47,7 @@ struct MemoryEstimate {
 // written, the tracer's hits and scene, the denoiser, the writer's strips, and the frames in
 // flight besides the one lit: memory.frames_in_flight), from the first frame's header alone.
 // Measured against the peak resident size of rendered 1080p and 4K shots
-// (tests/bench/rendered.sh): 13 to 15% above it.
+// (tests/bench/rendered.sh): 2 to 11% above it.
 MemoryEstimate estimate_run_memory(const SequenceInfo& sequence, const Plan& plan,
                                    const GiSettings& settings, const WriteOptions& write,
                                    int threads, const PipelineMemory& memory);
