@@ -1,7 +1,9 @@
 // Google Benchmark of one frame's GI stages at the resolution of the frame given in
 // SSGI_BENCH_FRAME (default: the 1080p room that tests/bench/make_1080p.sh writes to
 // /tmp/ssgi1080/room.0001.exr): read, trace grid, slice tracing, bounces, denoise, composite,
-// and the whole indirect light. Not a test: build/bin/bench_stages [--benchmark_repetitions=5]
+// and the whole indirect light; with SSGI_BENCH_VIEWS (the frame's views as --view takes them,
+// space-separated), the views' own light (light_views) and the whole indirect light with them.
+// Not a test: build/bin/bench_stages [--benchmark_repetitions=5]
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -10,9 +12,11 @@
 #include <filesystem>
 #include <memory>
 #include <random>
+#include <sstream>
 #include <string>
 #include <vector>
 
+#include "frame_stages.h"
 #include "gi/composite.h"
 #include "gi/denoise.h"
 #include "gi/denoise_kernels.h"
@@ -21,6 +25,7 @@
 #include "gi/misses.h"
 #include "gi/slice_kernel.h"
 #include "gi/slices.h"
+#include "io/views.h"
 #include "ssgi/io.h"
 #include "ssgi/pipeline.h"
 #include "ssgi/threads.h"
@@ -64,6 +69,28 @@ Loaded& frame() {
   return l;
 }
 
+// The frame again with its views (SSGI_BENCH_VIEWS), read as the run reads them.
+struct LoadedViews {
+  ssgi::SequenceInfo seq;
+  std::vector<ssgi::GBuffer> views;
+};
+
+LoadedViews& views() {
+  static LoadedViews v = [] {
+    LoadedViews v;
+    const char* env = std::getenv("SSGI_BENCH_VIEWS");
+    if (!env) return v;
+    ssgi::InputOptions in = frame().in;
+    std::istringstream patterns(env);
+    for (std::string p; patterns >> p;) in.views.push_back({p});
+    if (in.views.empty()) return v;
+    v.seq = ssgi::open_sequence(in);
+    v.views = ssgi::detail::read_views(v.seq, frame().g.frame, in, nullptr);
+    return v;
+  }();
+  return v;
+}
+
 void BM_Read(benchmark::State& state) {
   Loaded& l = frame();
   const ssgi::RoleMask roles = ssgi::make_plan(l.seq, l.s).roles;
@@ -88,6 +115,17 @@ void BM_TraceSlices(benchmark::State& state) {
     benchmark::DoNotOptimize(ssgi::detail::trace_slices(l.g, l.grid, l.s, *l.misses));
   state.counters["hits/sample"] = static_cast<double>(l.hits.entries()) / l.grid.origin.size();
 }
+// The same, also recording the missed rays for the views and the other frames to continue.
+void BM_TraceSlicesRecordingMisses(benchmark::State& state) {
+  Loaded& l = frame();
+  std::size_t rays = 0;
+  for (auto _ : state) {
+    ssgi::detail::MissedRays missed;
+    benchmark::DoNotOptimize(ssgi::detail::trace_slices(l.g, l.grid, l.s, *l.misses, &missed));
+    rays = missed.rays.size();
+  }
+  state.counters["missed rays"] = static_cast<double>(rays);
+}
 void BM_Bounces(benchmark::State& state) {
   Loaded& l = frame();
   for (auto _ : state)
@@ -103,6 +141,19 @@ void BM_IndirectLight(benchmark::State& state) {
   Loaded& l = frame();
   const ssgi::Pipeline pipeline(l.seq, l.s);
   for (auto _ : state) benchmark::DoNotOptimize(pipeline.indirect_light(l.g));
+}
+void BM_LightViews(benchmark::State& state) {
+  const LoadedViews& v = views();
+  if (v.views.empty()) return state.SkipWithError("no SSGI_BENCH_VIEWS");
+  const ssgi::detail::FrameStages stages(v.seq, frame().s, {});
+  for (auto _ : state) benchmark::DoNotOptimize(stages.light_views(v.views));
+}
+void BM_IndirectLightWithViews(benchmark::State& state) {
+  const LoadedViews& v = views();
+  if (v.views.empty()) return state.SkipWithError("no SSGI_BENCH_VIEWS");
+  const ssgi::Pipeline pipeline(v.seq, frame().s);
+  for (auto _ : state)
+    benchmark::DoNotOptimize(pipeline.indirect_light(frame().g, nullptr, &v.views));
 }
 
 // The kernels alone, on a million values in cache-sized batches: argument 0 the scalar twin,
@@ -197,6 +248,7 @@ BENCHMARK(BM_Read)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ReflectedAndMissModel)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_TraceGrid)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_TraceSlices)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_TraceSlicesRecordingMisses)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Bounces)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Denoise)->Unit(benchmark::kMillisecond);
 void BM_Composite(benchmark::State& state) {
@@ -207,6 +259,8 @@ void BM_Composite(benchmark::State& state) {
 }
 
 BENCHMARK(BM_IndirectLight)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LightViews)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_IndirectLightWithViews)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Composite)->Unit(benchmark::kMillisecond);
 
 int main(int argc, char** argv) {

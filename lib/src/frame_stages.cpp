@@ -94,14 +94,18 @@ int pyramid_level(int scale) {
 
 Image FrameStages::trace(const GBuffer& g, GBuffer* grid_out, Image* coverage,
                          std::shared_ptr<FrameTrace>* keep, CubeLight* cube, Image* shares,
-                         Image* reflected_out, const LitViews* views) const {
+                         Image* reflected_out, const LitViews* views,
+                         std::string* misses_note) const {
   const GiSettings& s = settings_;
   const Image reflected = reflected_radiance(g, plan_.gather_emission);
   TraceGrid grid =
       make_trace_grid(g, reflected, plan_.trace_scale, static_cast<float>(s.thickness));
   const MissModel misses(g, s.miss, env_);
   if (reflected_out) *reflected_out = grid.reflected;
-  log_info("frame " + std::to_string(g.frame) + ": " + misses.describe());
+  if (misses_note)
+    *misses_note = misses.describe();
+  else
+    log_info("frame " + std::to_string(g.frame) + ": " + misses.describe());
   if (grid_out) *grid_out = grid_gbuffer(g, grid);
   switch (s.tracer) {
     case Tracer::kReference: {
@@ -166,29 +170,35 @@ constexpr int kViewPasses = 3;
 LitViews FrameStages::light_views(const std::vector<GBuffer>& views) const {
   LitViews out;
   if (!plan_.views) return out;
-  for (const GBuffer& v : views) {
-    std::shared_ptr<FrameTrace> t;
-    Image light = trace(v, nullptr, nullptr, &t);
-    out.light.push_back(denoise_on_grid(v, std::move(light)));
-    out.traces.push_back(std::move(t));
-  }
+  // The views one per task: each is a few tiny grids whose own parallel loops leave a second
+  // thread little to do. Their lines for -v in the order given.
+  const std::size_t n = views.size();
+  out.traces.resize(n);
+  out.light.resize(n);
+  std::vector<std::string> notes(n);
+  parallel_for_rows(static_cast<int>(n), [&](int i) {
+    out.light[i] = denoise_on_grid(views[i], trace(views[i], nullptr, nullptr, &out.traces[i],
+                                                   nullptr, nullptr, nullptr, nullptr, &notes[i]));
+  });
+  for (std::size_t i = 0; i < n; ++i)
+    log_info("frame " + std::to_string(views[i].frame) + ": view " + std::to_string(i + 1) + ": " +
+             notes[i]);
   // Light bounces among the views: each one's missed rays continued in the others, which bring
   // their light of the pass before, one more bounce among them each pass (the hits found once).
-  const std::size_t n = out.traces.size();
   if (n < 2) return out;
   std::vector<ViewHits> found(n);
   std::vector<std::vector<const FrameTrace*>> others(n);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = 0; j < n; ++j)
+      if (j != i) others[i].push_back(out.traces[j].get());
   std::vector<char> continued(n, 0);
   const int passes = std::min(kViewPasses, std::max(1, settings_.bounces - 1));
   for (int pass = 0; pass < passes; ++pass) {
     std::vector<Image> again(n);
-    for (std::size_t i = 0; i < n; ++i) {
+    parallel_for_rows(static_cast<int>(n), [&](int i) {
       std::vector<const Image*> lights;
-      for (std::size_t j = 0; j < n; ++j) {
-        if (j == i) continue;
-        if (pass == 0) others[i].push_back(out.traces[j].get());
-        lights.push_back(&out.light[j]);
-      }
+      for (std::size_t j = 0; j < n; ++j)
+        if (j != static_cast<std::size_t>(i)) lights.push_back(&out.light[j]);
       FrameTrace& t = *out.traces[i];
       if (pass == 0)
         continued[i] =
@@ -199,7 +209,7 @@ LitViews FrameStages::light_views(const std::vector<GBuffer>& views) const {
                      ? denoise_on_grid(views[i],
                                        gather_bounces(t.grid, t.hits, settings_.bounces, t.misses))
                      : out.light[i];
-    }
+    });
     out.light = std::move(again);
   }
   return out;

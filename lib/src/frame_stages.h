@@ -83,10 +83,11 @@ class FrameStages {
   // With `cube` and `shares`, the last bounce's cube colours and the samples' shares of them,
   // with `reflected` the light the samples reflect.
   // With `views` (not empty), the missed rays are continued in them before the bounces.
+  // What the miss model decided (-v) goes to the log, or with `misses_note` there.
   Image trace(const GBuffer& g, GBuffer* grid_out, Image* coverage,
               std::shared_ptr<FrameTrace>* keep = nullptr, CubeLight* cube = nullptr,
-              Image* shares = nullptr, Image* reflected = nullptr,
-              const LitViews* views = nullptr) const;
+              Image* shares = nullptr, Image* reflected = nullptr, const LitViews* views = nullptr,
+              std::string* misses_note = nullptr) const;
 
   // Traced light on the trace grid denoised there (the pyramid from the grid's level), when
   // the plan denoises: TracedLight::light.
