@@ -337,7 +337,7 @@ struct SliceTracer {
   }
 
   // Traces the slices of trace sample `s` from pixel `p`; appends its hits, and with `record`
-  // its missed rays (record_slice_misses) and into *ray_origin where they start.
+  // appends its missed rays (record_slice_misses) and writes into *ray_origin where they start.
   void trace(int p, std::vector<std::int32_t>* pixels, std::vector<float>* weights, float* miss,
              float env_light[3], float cube[kCubeFaces], PixelMisses* record,
              Imath::V3f* ray_origin) const {
@@ -375,6 +375,7 @@ struct SliceTracer {
     PixelHits& hits = pixel_hits();
     hits.reserve(static_cast<std::size_t>(slices) * 2 * static_cast<std::size_t>(steps));
     int kept = 0;
+    const std::size_t recorded = record ? record->size() : 0;  // the rays of samples before
 
     for (int i = 0; i < slices; ++i) {
       float u_phi, u_rot, u_step;
@@ -463,12 +464,12 @@ struct SliceTracer {
     // the furnace stays exact, and the weights' variance is gone), at the same limit.
     if (!(total_weight > 0)) {
       *miss = 1.0f;
-      if (record) record->clear();
+      if (record) record->resize(recorded);
       return;
     }
     const float norm = 1.0f / total_weight;
     if (record)
-      for (MissedRay& r : *record) r.weight *= norm;
+      for (std::size_t k = recorded; k < record->size(); ++k) (*record)[k].weight *= norm;
     pixels->insert(pixels->end(), hits.pixel.begin(), hits.pixel.begin() + kept);
     for (int e = 0; e < kept; ++e) weights->push_back(hits.weight[e] * norm);
     *miss *= norm;
@@ -495,7 +496,6 @@ WeightedHits trace_slices(const GBuffer& g, const TraceGrid& grid, const GiSetti
   std::vector<std::vector<std::uint32_t>> row_missed_counts(row_missed.size());
   if (missed) missed->origin.assign(grid.origin.size(), Imath::V3f{0, 0, 0});
   parallel_for_rows(grid.height, [&](int by) {
-    PixelMisses pixel_missed;
     if (missed) row_missed_counts[by].assign(grid.width, 0);
     std::vector<std::int32_t>& px = row_pixels[by];
     std::vector<float>& wt = row_weights[by];
@@ -507,14 +507,13 @@ WeightedHits trace_slices(const GBuffer& g, const TraceGrid& grid, const GiSetti
       if (p < 0) continue;
       const std::size_t before = px.size();
       float miss = 0, env_light[3] = {0, 0, 0}, cube[kCubeFaces] = {0, 0, 0, 0, 0, 0};
-      pixel_missed.clear();
-      tracer.trace(p, &px, &wt, &miss, env_light, cube, missed ? &pixel_missed : nullptr,
+      const std::size_t missed_before = missed ? row_missed[by].size() : 0;
+      tracer.trace(p, &px, &wt, &miss, env_light, cube, missed ? &row_missed[by] : nullptr,
                    missed ? &missed->origin[s] : nullptr);
       counts[bx] = static_cast<std::uint32_t>(px.size() - before);
-      if (missed) {
-        row_missed[by].insert(row_missed[by].end(), pixel_missed.begin(), pixel_missed.end());
-        row_missed_counts[by][bx] = static_cast<std::uint32_t>(pixel_missed.size());
-      }
+      if (missed)
+        row_missed_counts[by][bx] =
+            static_cast<std::uint32_t>(row_missed[by].size() - missed_before);
       hits.miss.plane(0)[s] = miss;
       for (int c = 0; c < 3; ++c) hits.env.plane(c)[s] = env_light[c];
       for (int f = 0; f < kCubeFaces; ++f) hits.cube.plane(f)[s] = cube[f];
