@@ -4,6 +4,7 @@ Usage (Blender 3.4, headless; needs OIIO's oiiotool on PATH):
   blender -b FILE.blend --python-exit-code 1 --python tests/blender/render_views.py -- \
       --out DIR [--name NAME] [--frames FIRST-LAST | --frames FRAME] [--camera OBJECT]
       [--face-size N] [--latlong-width N] [--samples N] [--faces-only | --latlong-only]
+      [--with-indirect]
 
 For each frame (default: the scene's frame range) it renders, from the shot camera's world
 position at that frame:
@@ -13,7 +14,9 @@ position at that frame:
                              W x W/2 pixels (--latlong-width, default 512, even);
 NAME defaults to the .blend's file name without its extension, the shot camera to the one the
 scene renders each frame with (scene.camera, camera markers included); --camera names another
-camera object. --faces-only and --latlong-only render one kind of view.
+camera object. --faces-only and --latlong-only render one kind of view. --with-indirect also
+writes the path-traced diffuse indirect light (DiffInd, at the .blend's own bounces: a render
+about twice as long), the truth to measure the light ssgi computes for the views against.
 
 Faces are named in the shot camera's own frame (Blender camera space: x right, y up, looking
 along -z), each face camera looking along (image top towards):
@@ -91,7 +94,8 @@ def fail(message):
 
 def parse_args(argv):
     opts = {"out": None, "name": None, "frames": None, "camera": None, "face_size": 128,
-            "latlong_width": 512, "samples": 16, "faces": True, "latlong": True}
+            "latlong_width": 512, "samples": 16, "faces": True, "latlong": True,
+            "indirect": False}
     numbers = {"--face-size": "face_size", "--latlong-width": "latlong_width",
                "--samples": "samples"}
     i = 0
@@ -99,6 +103,10 @@ def parse_args(argv):
         arg = argv[i]
         if arg in ("--faces-only", "--latlong-only"):
             opts["latlong" if arg == "--faces-only" else "faces"] = False
+            i += 1
+            continue
+        if arg == "--with-indirect":
+            opts["indirect"] = True
             i += 1
             continue
         if i + 1 >= len(argv):
@@ -131,7 +139,7 @@ def parse_args(argv):
     return opts
 
 
-def render_settings(scene, samples):
+def render_settings(scene, samples, indirect):
     scene.render.engine = "CYCLES"
     scene.cycles.device = "CPU"
     scene.cycles.samples = samples
@@ -139,7 +147,8 @@ def render_settings(scene, samples):
     scene.cycles.time_limit = 0.0
     scene.cycles.use_denoising = False
     scene.cycles.film_filter_width = 0.01
-    scene.cycles.max_bounces = 0
+    if not indirect:
+        scene.cycles.max_bounces = 0
     scene.render.use_motion_blur = False
     # Cycles keeps the synced scene from one view to the next (the same pixels; heavy scenes
     # skip rebuilding their BVH per view).
@@ -161,7 +170,7 @@ def render_settings(scene, samples):
             for prop in owner.bl_rna.properties:
                 if prop.identifier.startswith("use_pass_") and not prop.is_readonly:
                     setattr(owner, prop.identifier, False)
-        for p in PASSES:
+        for p in PASSES + (("diffuse_indirect",) if indirect else ()):
             setattr(layer, "use_pass_" + p, True)
         layer.cycles.use_denoising = False
         layer.cycles.denoising_store_passes = False
@@ -252,7 +261,7 @@ def main():
         fail(f"empty frame range {first}-{last}")
     frames = range(first, last + 1)
     shots = shot_cameras(scene, opts["camera"], frames)
-    render_settings(scene, opts["samples"])
+    render_settings(scene, opts["samples"], opts["indirect"])
     out_dir = os.path.abspath(opts["out"])
     os.makedirs(out_dir, exist_ok=True)
     face_cam, pano_cam = add_view_cameras(scene)
