@@ -29,19 +29,20 @@ constexpr double kFront = 4.0, kBack = 3.0;
 constexpr float kLit = 0.8f, kAlbedo = 0.5f;
 
 // Where the ray from the origin along world-space `d` meets a wall: its parameter (infinite
-// when it meets none) and the wall's normal and reflected light.
+// when it meets none) and the wall's normal and reflected light. Without `back_wall`, the sky
+// lies behind the camera.
 struct WallHit {
   double t = std::numeric_limits<double>::infinity();
   Imath::V3d normal{0, 0, 0};
   float reflected = 0;
 };
 
-WallHit walls(const Imath::V3d& d) {
+WallHit walls(const Imath::V3d& d, bool back_wall) {
   WallHit w;
   if (d.z > 1e-12) {
     w.t = kFront / d.z;
     w.normal = {0, 0, -1};
-  } else if (d.z < -1e-12) {
+  } else if (d.z < -1e-12 && back_wall) {
     w.t = kBack / -d.z;
     w.normal = {0, 0, 1};
     w.reflected = kLit;
@@ -64,8 +65,8 @@ Imath::M44d world_to_camera(const Imath::V3d& right, const Imath::V3d& up,
 
 // The scene as seen by `camera` (at the origin) over a square or 2:1 window of `width` x
 // `height` pixels: depth (planar, or the distance for a lat-long), camera-space normals,
-// albedo, direct light.
-GBuffer render(const Camera& camera, int width, int height) {
+// albedo, direct light; the sky (infinite depth) where a ray meets no wall.
+GBuffer render(const Camera& camera, int width, int height, bool back_wall = true) {
   GBuffer g;
   g.display_window = g.data_window = Box2i{0, 0, width, height};
   g.camera = camera;
@@ -81,7 +82,7 @@ GBuffer render(const Camera& camera, int width, int height) {
       const Imath::V3d d{c.x * m[0][0] + c.y * m[0][1] + c.z * m[0][2],
                          c.x * m[1][0] + c.y * m[1][1] + c.z * m[1][2],
                          c.x * m[2][0] + c.y * m[2][1] + c.z * m[2][2]};
-      const WallHit w = walls(d);
+      const WallHit w = walls(d, back_wall);
       const bool latlong = camera.projection == Projection::kLatLong;
       g.depth.at(0, x, y) = static_cast<float>(latlong ? w.t : w.t * c.z);
       for (int k = 0; k < 3; ++k) {
@@ -94,7 +95,7 @@ GBuffer render(const Camera& camera, int width, int height) {
 }
 
 // The six 90-degree faces of a cube at the origin, `size` pixels square.
-std::vector<GBuffer> cube_faces(int size) {
+std::vector<GBuffer> cube_faces(int size, bool back_wall = true) {
   const Imath::V3d forward[6] = {{0, 0, 1},  {0, 0, -1}, {1, 0, 0},
                                  {-1, 0, 0}, {0, 1, 0},  {0, -1, 0}};
   const Imath::V3d up[6] = {{0, 1, 0}, {0, 1, 0}, {0, 1, 0}, {0, 1, 0}, {0, 0, -1}, {0, 0, 1}};
@@ -103,7 +104,7 @@ std::vector<GBuffer> cube_faces(int size) {
     Camera c = camera_from_fov(90.0, Box2i{0, 0, size, size});
     c.world_to_camera = world_to_camera(up[f].cross(forward[f]), up[f], forward[f]);
     c.has_world_transform = true;
-    faces.push_back(render(c, size, size));
+    faces.push_back(render(c, size, size, back_wall));
   }
   return faces;
 }
@@ -206,6 +207,33 @@ TEST(Views, LightBehindTheCameraIsFoundInCubeFacesAndALatLong) {
   EXPECT_NEAR(pano.light / kLit, 1.0, 0.10);
   EXPECT_GT(pano.coverage, 0.95);
   EXPECT_NEAR(std::fabs(pano.light - kLit), std::fabs(cube.light - kLit), 0.1 * kLit);
+}
+
+// Without the back wall, the sky lies behind the camera, an environment of one colour: every ray
+// of the front wall's hemisphere reaches it, so its indirect light is that colour. The frame
+// alone shows no sky, and its miss model (--miss frame) takes what it does not show for
+// surfaces like those it shows, which are dark; the six faces show the sky there.
+TEST(Views, RaysThatTheViewsShowTheSkyForTakeTheEnvironment) {
+  constexpr float kSky = 0.6f;
+  GiSettings s = view_settings();
+  s.bounces = 2;
+  s.miss = MissMode::kFrame;
+  s.env_color = {kSky, kSky, kSky};
+  const Shot shot(s);
+  const GBuffer& g = shot.f.g;
+
+  const detail::FrameStages alone(shot.f.seq, s);
+  Image coverage;
+  const Means without = inner_means(alone.indirect_light(g, &coverage), coverage);
+  std::printf("without views: indirect %.4f (the miss model's guess; the sky's %.4f)\n",
+              without.light, kSky);
+  EXPECT_LT(without.light, 0.5 * kSky);
+
+  const detail::FrameStages with(shot.with_views({Projection::kPinhole}), s);
+  const detail::LitViews faces = with.light_views(numbered(cube_faces(32, false), g.frame));
+  const Means cube = inner_means(with.indirect_light(g, &coverage, &faces), coverage);
+  std::printf("six faces: indirect %.4f (expected %.4f)\n", cube.light, kSky);
+  EXPECT_NEAR(cube.light / kSky, 1.0, 0.10);
 }
 
 // A lat-long's faces are the faces rendered directly, to a pixel's worth of the panorama.

@@ -93,6 +93,15 @@ class MissModel {
     for (int c = 0; c < 3; ++c) env[c] += w * (1.0f - surfaces) * l[c];
   }
 
+  // What a ray of weight `w` known to reach the sky along camera-space unit direction `d` brings
+  // (a view shows no surface in its direction): the environment's light there, added to
+  // light[3].
+  void add_sky(const Imath::V3f& d, float w, float light[3]) const {
+    if (env_.is_black()) return;
+    const std::array<float, 3> l = environment(d);
+    for (int c = 0; c < 3; ++c) light[c] += w * l[c];
+  }
+
   // The share of the sky along camera-space unit direction `d`: the front's share by
   // elevation, turning into the one behind the camera as `d` turns away from the view (in
   // proportion to the cosine of its horizontal angle from straight back, none sideways).

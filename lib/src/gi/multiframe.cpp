@@ -122,22 +122,24 @@ void add_hit_light(const FrameTrace& t, const std::vector<std::array<float, 3>>&
   }
 }
 
-// What a trace sample's continued rays found: their light, and the shares of the miss model
-// they no longer leave to it (their environment light, cube shares and weight).
+// What a trace sample's continued rays found: their light, the environment's light of those
+// known to reach the sky, and the shares of the miss model they no longer leave to it (their
+// environment light, cube shares and weight).
 struct Found {
-  float light[3] = {0, 0, 0}, env[3] = {0, 0, 0}, cube[kCubeFaces] = {};
+  float light[3] = {0, 0, 0}, sky[3] = {0, 0, 0}, env[3] = {0, 0, 0}, cube[kCubeFaces] = {};
   float miss = 0;
 
   // Into sample s: the light added to `foreign`, the shares taken out of `env`, `cube` and
-  // `miss`. The tracer summed the shares over its bins of equal angle, not per ray, so they are
-  // not exactly what is taken out: held at 0. (Shrinking all the shares by the found part of the
-  // misses instead measured worse: it leaves part of the found direction's share in place,
-  // counting that light twice.)
+  // `miss`, the sky's light added to `env` (the environment's light, as the misses' is). The
+  // tracer summed the shares over its bins of equal angle, not per ray, so they are not exactly
+  // what is taken out: held at 0. (Shrinking all the shares by the found part of the misses
+  // instead measured worse: it leaves part of the found direction's share in place, counting
+  // that light twice.)
   void apply(std::size_t s, Image* foreign, Image* env_share, Image* cube_share,
              Image* miss_share) const {
     for (int c = 0; c < 3; ++c) {
       foreign->plane(c)[s] += light[c];
-      env_share->plane(c)[s] = std::max(env_share->plane(c)[s] - env[c], 0.0f);
+      env_share->plane(c)[s] = std::max(env_share->plane(c)[s] - env[c], 0.0f) + sky[c];
     }
     for (int f = 0; f < kCubeFaces; ++f)
       cube_share->plane(f)[s] = std::max(cube_share->plane(f)[s] - cube[f], 0.0f);
@@ -282,6 +284,24 @@ std::int32_t march_in(const View& n, const Imath::V3f& o, const Imath::V3f& d, f
   return mark_side(hit, in_front < -kBehindTolerance * p.z);
 }
 
+// Whether the views show the sky in camera-space direction `d` (the centre's space): the first
+// view (in their order) whose picture holds d's vanishing point shows no surface at the trace
+// sample there. What a ray along d meets, if it meets nothing that any view shows, lies beyond
+// every surface the views show in its direction: there is none there.
+bool shows_sky(const std::vector<Neighbour>& views, const Imath::V3f& d) {
+  for (const Neighbour& n : views) {
+    const Imath::V3f dn = n.from_center.direction(d);
+    if (!(dn.z > 0)) continue;
+    const TraceGrid& g = n.view->trace->grid;
+    const float sx = g.cx + g.fx * dn.x / dn.z, sy = g.cy - g.fy * dn.y / dn.z;
+    if (!(sx >= 0 && sy >= 0 && sx < static_cast<float>(g.width) &&
+          sy < static_cast<float>(g.height)))
+      continue;
+    return g.origin[static_cast<std::size_t>(sy) * g.width + static_cast<std::size_t>(sx)] < 0;
+  }
+  return false;
+}
+
 // Whether the centre frame sees past camera-space point `x` (its own space): x projects onto its
 // grid in front of the surface it shows there by more than the slab, or onto its background.
 bool seen_past(const View& center, const Imath::V3f& x) {
@@ -357,6 +377,7 @@ std::string ViewsReport::describe(int frame) const {
   if (views == 0) return s.str() + "nothing continued (no view has a world transform)";
   s << rays << " missed rays continued in " << views << (views == 1 ? " view" : " views") << "; "
     << found << " met a surface";
+  if (sky) s << ", " << sky << " reached the sky (the views show nothing in their direction)";
   if (refused) s << ", " << refused << " more met only surfaces the frame sees past (not taken)";
   return s.str();
 }
@@ -394,13 +415,13 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
   // The found rays, row by row, when asked for.
   std::vector<std::vector<ViewHit>> found_by_row(found_rays ? grid.height : 0);
   std::vector<std::uint32_t> found_count(found_rays ? grid.origin.size() : 0, 0);
-  std::atomic<std::size_t> rays{0}, found{0}, refused{0};
+  std::atomic<std::size_t> rays{0}, found{0}, sky{0}, refused{0};
   struct Entering {
     float t;
     std::size_t n;
   };
   parallel_for_rows(grid.height, [&](int by) {
-    std::size_t row_rays = 0, row_found = 0, row_refused = 0;
+    std::size_t row_rays = 0, row_found = 0, row_sky = 0, row_refused = 0;
     std::vector<Entering> entering;
     entering.reserve(count);
     // What the rays of one trace sample share, per view: their origin in its space and the
@@ -460,6 +481,15 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
               best_along = along;
             }
           }
+          // Met nothing any view shows, where a view shows the sky: it reaches the sky.
+          if (!best && !was_refused && !std::isinf(t_from) &&
+              shows_sky(neighbours, ray.direction)) {
+            self.misses.add(ray.direction, ray.weight, found_here->env, found_here->cube);
+            self.misses.add_sky(ray.direction, ray.weight, found_here->sky);
+            found_here->miss += ray.weight;
+            ++row_sky;
+            return;
+          }
           if (!best) {
             if (was_refused) ++row_refused;
             if (keep_missed) {
@@ -480,10 +510,12 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
         });
     rays += row_rays;
     found += row_found;
+    sky += row_sky;
     refused += row_refused;
   });
   r.rays = rays;
   r.found = found;
+  r.sky = sky;
   r.refused = refused;
   if (!keep_missed) {
     self.missed = MissedRays();
@@ -502,7 +534,7 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
         grid, found_by_row,
         [&](int by, int bx) { return found_count[static_cast<std::size_t>(by) * grid.width + bx]; },
         &found_rays->begin, &found_rays->hits);
-  return r.found > 0;
+  return r.found + r.sky > 0;
 }
 
 Image view_light(const FrameTrace& self, const ViewHits& found,

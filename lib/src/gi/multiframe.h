@@ -81,6 +81,7 @@ struct ViewsReport {
   int views = 0;            // views with a world transform (the others are not marched)
   std::size_t rays = 0;     // missed rays continued (not seen free to their vanishing point)
   std::size_t found = 0;    // of those, the ones that met a surface in a view
+  std::size_t sky = 0;      // the ones that met none where a view shows the sky (shows_sky)
   std::size_t refused = 0;  // rays that met only surfaces the frame sees past (not taken)
   std::string describe(int frame) const;
 };
@@ -97,7 +98,10 @@ struct ViewsReport {
 // taken out of miss, env and cube; with `keep_missed`, self->missed keeps only the rays still
 // missed, for the shot's other frames to continue (else it is emptied). A view's mesh also joins
 // neighbours that lie on one plane seen at a grazing angle (DepthMesh::join_tangent_neighbours): a
-// view's few pixels see much of the scene so. True when a ray met a surface; nothing changes
+// view's few pixels see much of the scene so. A ray that meets nothing any view shows, where
+// the first view whose picture holds its vanishing point shows no surface there, reaches the
+// sky: it takes the environment's light (into env) and its shares of the miss model are taken
+// out as a found ray's are. True when a ray met a surface or reached the sky; nothing changes
 // without a world transform for the frame's camera. With `found`, also which view sample each found
 // ray met and its weight, for view_light.
 struct ViewHit {
