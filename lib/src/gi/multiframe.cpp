@@ -58,11 +58,6 @@ float ray_jitter(std::size_t sample, std::size_t ray, int frame, std::uint32_t s
             (static_cast<std::uint64_t>(static_cast<std::uint32_t>(frame)) << 32 | seed)));
 }
 
-// One frame as the continued rays see it: its grid's mesh, its camera, and the light a hit
-// on each trace sample brings (front at 2 s, unseen back at 2 s + 1): what it reflects plus its
-// albedo x the indirect light the frame gathered itself, after all its bounces (so a continued
-// ray brings a bounce more than the frame's own last hits, but for --bounces 1, where it
-// brings what the surface reflects alone, and nothing from its back).
 // The light a hit on each trace sample of `t` brings (front at 2 s, unseen back at 2 s + 1):
 // what it reflects plus its albedo x `own_light`, the indirect light it gathered itself.
 std::vector<std::array<float, 3>> hit_light(const FrameTrace& t, const Image& own_light) {
@@ -81,6 +76,11 @@ std::vector<std::array<float, 3>> hit_light(const FrameTrace& t, const Image& ow
   return light;
 }
 
+// One frame as the continued rays see it: its grid's mesh, its camera, and the light a hit
+// on each trace sample brings (front at 2 s, unseen back at 2 s + 1): what it reflects plus its
+// albedo x the indirect light the frame gathered itself, after all its bounces (so a continued
+// ray brings a bounce more than the frame's own last hits, but for --bounces 1, where it
+// brings what the surface reflects alone, and nothing from its back).
 struct View {
   const FrameTrace* trace;
   DepthMesh mesh;
