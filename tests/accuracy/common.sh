@@ -35,3 +35,12 @@ truth_means() {
   done | awk '{ for (c = 1; c <= 7; ++c) s[c] += $c; n++ }
     END { for (c = 1; c <= 7; ++c) printf "%.3f%s", s[c] / n, c < 7 ? " " : "\n" }'
 }
+
+# save_scene_blend SCENE DIR FRAMES RESOLUTION: training scene SCENE built by scenes.py as the
+# cache renders it (FRAMES frames at WxH RESOLUTION), saved as DIR/SCENE.blend unrendered, for
+# render_views.py to render its views from; Blender's output to DIR/blender.log.
+save_scene_blend() {
+  "${BLENDER:-blender}" -b --factory-startup --python-exit-code 1 \
+    -P tests/accuracy/training/scenes.py -- --scene "$1" --out "$2/scene" --frames "$3" \
+    --resolution "$4" --no-render --save "$2/$1.blend" > "$2/blender.log" 2>&1
+}

@@ -34,9 +34,7 @@ render_faces() {
   local dir=$cache/$1.view_light
   [ -f "$dir/done.$frame" ] && return 0
   mkdir -p "$dir"
-  "$blender" -b --factory-startup --python-exit-code 1 -P tests/accuracy/training/scenes.py -- \
-    --scene "$1" --out "$dir/scene" --frames "$frames" --resolution "$resolution" \
-    --no-render --save "$dir/$1.blend" > "$dir/blender.log" 2>&1
+  save_scene_blend "$1" "$dir" "$frames" "$resolution"
   "$blender" -b "$dir/$1.blend" --python-exit-code 1 --python tests/blender/render_views.py \
     -- --out "$dir" --name "$1" --frames "$frame" --face-size 128 --samples "$samples" \
     --faces-only --with-indirect >> "$dir/blender.log" 2>&1

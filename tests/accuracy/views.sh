@@ -28,9 +28,7 @@ render_views() {
   [ -f "$views/done" ] && return 0
   rm -rf "$views"
   mkdir -p "$views"
-  "$blender" -b --factory-startup --python-exit-code 1 -P tests/accuracy/training/scenes.py -- \
-    --scene "$1" --out "$views/scene" --frames "$frames" --resolution "$resolution" \
-    --no-render --save "$views/$1.blend" > "$views/blender.log" 2>&1
+  save_scene_blend "$1" "$views" "$frames" "$resolution"
   "$blender" -b "$views/$1.blend" --python-exit-code 1 --python tests/blender/render_views.py \
     -- --out "$views" --name "$1" --frames "1-$frames" --face-size 128 --latlong-width 512 \
     --samples "$samples" >> "$views/blender.log" 2>&1
