@@ -236,6 +236,41 @@ TEST(Views, RaysThatTheViewsShowTheSkyForTakeTheEnvironment) {
   EXPECT_NEAR(cube.light / kSky, 1.0, 0.10);
 }
 
+// A found ray takes its shares of the miss model out of its sample's (Found::apply): its own
+// direction's times its weight, which stand for its run of missed sectors in the mean but can
+// exceed what the sample holds on one cube face. The front wall lit, so that the miss model
+// (--miss frame) takes what the frame does not show for bright surfaces; every ray of its
+// hemisphere meets the back wall in the faces, so its indirect light is the back wall's, kLit,
+// and any share left to the miss model would add the front wall's light to it. Holding each
+// share at zero instead leaves the undershot faces' shares in place: 1.15 kLit here with two
+// rays a slice, 1.28 with one.
+TEST(Views, FoundRaysLeaveTheMissModelNothingInTheMean) {
+  constexpr float kFrontLight = 2.0f;
+  GiSettings s = view_settings();
+  s.miss = MissMode::kFrame;
+  Shot shot(s);
+  GBuffer& g = shot.f.g;
+  for (int k = 0; k < 3; ++k)
+    for (std::size_t p = 0; p < g.direct.plane_size(); ++p) g.direct.plane(k)[p] = kFrontLight;
+
+  const detail::FrameStages alone(shot.f.seq, s);
+  Image coverage;
+  const Means without = inner_means(alone.indirect_light(g, &coverage), coverage);
+  std::printf("without views: indirect %.4f (the miss model's guess; the back wall's %.4f)\n",
+              without.light, kLit);
+  ASSERT_GT(without.light, 0.2 * kAlbedo * kFrontLight);
+
+  const detail::FrameStages with(shot.with_views({Projection::kPinhole}), s);
+  const detail::LitViews faces = with.light_views(numbered(cube_faces(32), g.frame));
+  const Image light = with.indirect_light(g, &coverage, &faces);
+  const Means cube = inner_means(light, coverage);
+  std::printf("six faces: indirect %.4f (expected %.4f)\n", cube.light, kLit);
+  EXPECT_NEAR(cube.light / kLit, 1.0, 0.05);
+  // A sample's shares can fall below zero; the light is held at zero.
+  for (int k = 0; k < 3; ++k)
+    for (std::size_t p = 0; p < light.plane_size(); ++p) ASSERT_GE(light.plane(k)[p], 0.0f);
+}
+
 // A lat-long's faces are the faces rendered directly, to a pixel's worth of the panorama.
 TEST(Views, LatLongFacesAreTheCubeFacesOfItsCamera) {
   Camera ll = latlong_camera(Imath::M44d(), Box2i{0, 0, 1024, 512}, "analytic");

@@ -90,12 +90,26 @@ int pyramid_level(int scale) {
   return level;
 }
 
+// With views, a trace sample's shares of the miss model can fall below zero (multiframe.h,
+// kViewRunsPerSlice), and so can the light of a sample that has little: the denoised light,
+// which averages them, is held at zero.
+Image held_at_zero(Image light) {
+  for (int c = 0; c < light.channels(); ++c) {
+    float* p = light.plane(c);
+    parallel_for_rows(light.height(), [&](int y) {
+      float* row = p + static_cast<std::size_t>(y) * light.width();
+      for (int x = 0; x < light.width(); ++x) row[x] = std::max(row[x], 0.0f);
+    });
+  }
+  return light;
+}
+
 }  // namespace
 
 Image FrameStages::trace(const GBuffer& g, GBuffer* grid_out, Image* coverage,
                          std::shared_ptr<FrameTrace>* keep, CubeLight* cube, Image* shares,
-                         Image* reflected_out, const LitViews* views,
-                         std::string* misses_note) const {
+                         Image* reflected_out, const LitViews* views, std::string* misses_note,
+                         int kept_runs) const {
   const GiSettings& s = settings_;
   const Image reflected = reflected_radiance(g, plan_.gather_emission);
   TraceGrid grid =
@@ -126,7 +140,8 @@ Image FrameStages::trace(const GBuffer& g, GBuffer* grid_out, Image* coverage,
   }
   if (views && !views->empty()) {
     MissedRays missed;
-    WeightedHits hits = trace_slices(g, grid, s, misses, &missed);
+    WeightedHits hits =
+        trace_slices(g, grid, s, misses, &missed, keep ? kept_runs : kViewRunsPerSlice);
     auto t = std::make_shared<FrameTrace>(g.frame, g.camera, std::move(grid), std::move(hits),
                                           misses, std::move(missed));
     std::vector<const FrameTrace*> traces;
@@ -144,7 +159,7 @@ Image FrameStages::trace(const GBuffer& g, GBuffer* grid_out, Image* coverage,
     return light;
   }
   MissedRays missed;
-  WeightedHits hits = trace_slices(g, grid, s, misses, keep ? &missed : nullptr);
+  WeightedHits hits = trace_slices(g, grid, s, misses, keep ? &missed : nullptr, kept_runs);
   Image light = gather_bounces(grid, hits, s.bounces, misses, coverage, cube);
   if (!keep) {
     if (shares) *shares = std::move(hits.cube);
@@ -177,8 +192,9 @@ LitViews FrameStages::light_views(const std::vector<GBuffer>& views) const {
   out.light.resize(n);
   std::vector<std::string> notes(n);
   parallel_for_rows(static_cast<int>(n), [&](int i) {
-    out.light[i] = denoise_on_grid(views[i], trace(views[i], nullptr, nullptr, &out.traces[i],
-                                                   nullptr, nullptr, nullptr, nullptr, &notes[i]));
+    out.light[i] = held_at_zero(
+        denoise_on_grid(views[i], trace(views[i], nullptr, nullptr, &out.traces[i], nullptr,
+                                        nullptr, nullptr, nullptr, &notes[i], kViewRunsPerSlice)));
   });
   for (std::size_t i = 0; i < n; ++i)
     log_info("frame " + std::to_string(views[i].frame) + ": view " + std::to_string(i + 1) + ": " +
@@ -206,8 +222,8 @@ LitViews FrameStages::light_views(const std::vector<GBuffer>& views) const {
       else if (continued[i])
         t.hits.foreign = view_light(t, found[i], others[i], lights, settings_);
       again[i] = continued[i]
-                     ? denoise_on_grid(views[i],
-                                       gather_bounces(t.grid, t.hits, settings_.bounces, t.misses))
+                     ? held_at_zero(denoise_on_grid(
+                           views[i], gather_bounces(t.grid, t.hits, settings_.bounces, t.misses)))
                      : out.light[i];
     });
     out.light = std::move(again);
@@ -259,9 +275,11 @@ Image FrameStages::finish_coverage(const GBuffer& g, const GBuffer& grid,
 
 Image FrameStages::finish_light(const GBuffer& g, const Image& grid_light) const {
   const int level = pyramid_level(plan_.trace_scale);
-  if (level == 0) return grid_light;
-  return upsample_and_denoise(grid_light, level, g.depth, g.normal, settings_.denoise_settings,
-                              false);
+  Image light = level == 0 ? grid_light
+                           : upsample_and_denoise(grid_light, level, g.depth, g.normal,
+                                                  settings_.denoise_settings, false);
+  if (plan_.views) return held_at_zero(std::move(light));
+  return light;
 }
 
 Image FrameStages::indirect_light(const GBuffer& g, Image* coverage, const LitViews* views) const {
@@ -275,9 +293,11 @@ Image FrameStages::indirect_light(const GBuffer& g, Image* coverage, const LitVi
   Image light =
       trace(g, coverage ? &grid : nullptr, coverage, nullptr, nullptr, nullptr, nullptr, views);
   if (coverage) *coverage = finish_coverage(g, grid, *coverage);
-  if (level == 0 && !plan.denoise) return light;
-  return upsample_and_denoise(light, level, g.depth, g.normal, settings_.denoise_settings,
-                              plan.denoise);
+  if (level != 0 || plan.denoise)
+    light = upsample_and_denoise(light, level, g.depth, g.normal, settings_.denoise_settings,
+                                 plan.denoise);
+  if (views && !views->empty()) return held_at_zero(std::move(light));
+  return light;
 }
 
 bool FrameStages::continue_light(const GBuffer& g, const std::vector<const TracedLight*>& window,

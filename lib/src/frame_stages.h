@@ -9,6 +9,7 @@
 
 #include "gi/environment.h"
 #include "gi/misses.h"
+#include "gi/multiframe.h"
 #include "gi/temporal.h"
 #include "ssgi/color.h"
 #include "ssgi/gbuffer.h"
@@ -83,11 +84,13 @@ class FrameStages {
   // With `cube` and `shares`, the last bounce's cube colours and the samples' shares of them,
   // with `reflected` the light the samples reflect.
   // With `views` (not empty), the missed rays are continued in them before the bounces.
-  // What the miss model decided (-v) goes to the log, or with `misses_note` there.
+  // What the miss model decided (-v) goes to the log, or with `misses_note` there. The missed
+  // rays kept are `kept_runs` per slice (multiframe.h: kViewRunsPerSlice for a view's, which only
+  // the other views continue); those the views alone continue, kViewRunsPerSlice.
   Image trace(const GBuffer& g, GBuffer* grid_out, Image* coverage,
               std::shared_ptr<FrameTrace>* keep = nullptr, CubeLight* cube = nullptr,
               Image* shares = nullptr, Image* reflected = nullptr, const LitViews* views = nullptr,
-              std::string* misses_note = nullptr) const;
+              std::string* misses_note = nullptr, int kept_runs = kMultiframeRunsPerSlice) const;
 
   // Traced light on the trace grid denoised there (the pyramid from the grid's level), when
   // the plan denoises: TracedLight::light.

@@ -131,18 +131,20 @@ struct Found {
 
   // Into sample s: the light added to `foreign`, the shares taken out of `env`, `cube` and
   // `miss`, the sky's light added to `env` (the environment's light, as the misses' is). The
-  // tracer summed the shares over its bins of equal angle, not per ray, so they are not exactly
-  // what is taken out: held at 0. (Shrinking all the shares by the found part of the misses
-  // instead measured worse: it leaves part of the found direction's share in place, counting
-  // that light twice.)
-  void apply(std::size_t s, Image* foreign, Image* env_share, Image* cube_share,
+  // tracer summed the shares over its bins of equal angle, and a ray's stand for its whole run
+  // of sectors, so they are not exactly what is taken out (kViewRunsPerSlice): with
+  // `hold_at_zero`, each share is held at zero, which biases the light up; else only the weight
+  // is. (Shrinking all the shares by the found part of the misses instead measured worse: it
+  // leaves part of the found direction's share in place, counting that light twice.)
+  void apply(std::size_t s, bool hold_at_zero, Image* foreign, Image* env_share, Image* cube_share,
              Image* miss_share) const {
+    const float floor = hold_at_zero ? 0.0f : -std::numeric_limits<float>::infinity();
     for (int c = 0; c < 3; ++c) {
       foreign->plane(c)[s] += light[c];
-      env_share->plane(c)[s] = std::max(env_share->plane(c)[s] - env[c], 0.0f) + sky[c];
+      env_share->plane(c)[s] = std::max(env_share->plane(c)[s] - env[c], floor) + sky[c];
     }
     for (int f = 0; f < kCubeFaces; ++f)
-      cube_share->plane(f)[s] = std::max(cube_share->plane(f)[s] - cube[f], 0.0f);
+      cube_share->plane(f)[s] = std::max(cube_share->plane(f)[s] - cube[f], floor);
     miss_share->plane(0)[s] = std::max(miss_share->plane(0)[s] - miss, 0.0f);
   }
 };
@@ -226,10 +228,11 @@ struct Frustum {
 // jitter, t_from, &found)` with the sample, the rays' camera-space origin, the ray, its march
 // jitter and where the frame stops seeing its way free (where the tracer saw it pass behind what
 // the frame shows, else where it leaves the frame, or infinite when it never does); then each
-// sample's found light and shares go into the four images (Found::apply).
+// sample's found light and shares go into the four images (Found::apply, `hold_at_zero`).
 template <typename RayBody>
-void walk_missed_rays(const FrameTrace& self, int by, const GiSettings& settings, Image* foreign,
-                      Image* env, Image* cube, Image* miss, const RayBody& ray_body) {
+void walk_missed_rays(const FrameTrace& self, int by, const GiSettings& settings, bool hold_at_zero,
+                      Image* foreign, Image* env, Image* cube, Image* miss,
+                      const RayBody& ray_body) {
   const TraceGrid& grid = self.grid;
   for (int bx = 0; bx < grid.width; ++bx) {
     const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
@@ -243,7 +246,7 @@ void walk_missed_rays(const FrameTrace& self, int by, const GiSettings& settings
       const float t_from = std::min(ray.hidden, leaves_view(grid, o, ray.direction, o.z));
       ray_body(s, o, ray, jitter, t_from, &found);
     }
-    found.apply(s, foreign, env, cube, miss);
+    found.apply(s, hold_at_zero, foreign, env, cube, miss);
   }
 }
 
@@ -432,7 +435,7 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
     const float t_end =
         settings.max_distance > 0 ? static_cast<float>(settings.max_distance) : kFarFactor;
     walk_missed_rays(
-        self, by, settings, &hits.foreign, &hits.env, &hits.cube, &hits.miss,
+        self, by, settings, false, &hits.foreign, &hits.env, &hits.cube, &hits.miss,
         [&](std::size_t s, const Imath::V3f& o, const MissedRay& ray, float jitter, float t_from,
             Found* found_here) {
           // Views at the frame's own time: of the surfaces they show on the ray, the nearest.
@@ -600,7 +603,7 @@ bool continue_rays(const std::vector<const FrameTrace*>& frames,
     // What the found rays no longer leave to the miss model: their shares of it, as the miss
     // model gives them for their directions.
     walk_missed_rays(
-        self, by, settings, &foreign, &env, &cube, &miss,
+        self, by, settings, true, &foreign, &env, &cube, &miss,
         [&](std::size_t, const Imath::V3f& o, const MissedRay& ray, float jitter, float t_from,
             Found* found_here) {
           // The frame has seen the ray's way free up to where it leaves the frame or passes

@@ -42,6 +42,20 @@ struct MissedRay {
 };
 using PixelMisses = std::vector<MissedRay>;
 
+// Rays per slice that carry its missed sectors on (trace_slices), each weighing its run of them.
+// A found ray takes its own direction's shares of the miss model times its weight out of its
+// sample's: its run's shares in the mean, but not face by face, so that on one cube face or the
+// environment it can take out more than the sample holds there. The views take the shares out as
+// they are (a sample's can fall below zero; the light is held at zero once denoised, FrameStages):
+// the light is then the same in the mean for any count of rays, and one ray per slice continues
+// half the rays of two at the same error. Six faces on the training set, 64 samples
+// (tests/accuracy/views.sh): mean relRMSE 0.374 with one, 0.373 with two; with each share held at
+// zero, 0.399 and 0.376, the mean level 14% and 6% higher. --multiframe holds each share at zero
+// and keeps two: its neighbours find few of its rays (the shares as they are: mean relRMSE 0.404
+// either way, level 1.004 against 1.012).
+constexpr int kViewRunsPerSlice = 1;
+constexpr int kMultiframeRunsPerSlice = 2;
+
 // A frame's missed rays, per trace sample (the slice tracer records them, slices.h).
 // (Resizing begin and rays leaves the new entries for the tracer to write, in parallel.)
 struct MissedRays {

@@ -17,8 +17,6 @@ namespace ssgi::detail {
 namespace {
 
 constexpr int kSectors = 32;
-// Rays per slice that carry its missed sectors to the other frames (record_slice_misses).
-constexpr int kContinuedPerSlice = 2;
 
 constexpr float kPi = kSlicePi;
 
@@ -196,8 +194,10 @@ struct SliceTracer {
   int w, h;              // the frame's data window
   float fx, fy, cx, cy;  // the camera in trace-grid units
   float inv_fx, inv_fy;
+  int missed_runs;  // rays per slice that carry its missed sectors on (record_slice_misses)
 
-  SliceTracer(const GBuffer& gb, const TraceGrid& gr, const GiSettings& s, const MissModel& m)
+  SliceTracer(const GBuffer& gb, const TraceGrid& gr, const GiSettings& s, const MissModel& m,
+              int runs)
       : g(gb),
         grid(gr),
         settings(s),
@@ -212,7 +212,8 @@ struct SliceTracer {
         cx(gr.cx),
         cy(gr.cy),
         inv_fx(1.0f / gr.fx),
-        inv_fy(1.0f / gr.fy) {}
+        inv_fy(1.0f / gr.fy),
+        missed_runs(runs) {}
 
   // The camera-space direction through trace-grid coordinates (sx, sy), at z = 1.
   Imath::V3f ray(float sx, float sy) const {
@@ -282,7 +283,7 @@ struct SliceTracer {
   }
 
   // The missed sectors of a slice as rays for other frames to continue (multiframe.h): the
-  // missed sectors in order, cut into kContinuedPerSlice runs of (nearly) equal count, and per
+  // missed sectors in order, cut into `missed_runs` runs of (nearly) equal count, and per
   // run the ray of one of its sectors, drawn at random, weighing the whole run: an unbiased
   // estimate of what the run's rays would find. The ray's angle inverts the slice's measure by
   // interpolation in a table of it over the half-disc; the sides' samples (`marched`) tell where
@@ -310,7 +311,7 @@ struct SliceTracer {
     int sectors[kSectors], count = 0;
     for (int k = 0; k < kSectors; ++k)
       if (missed >> k & 1u) sectors[count++] = k;
-    const int runs = std::min(count, kContinuedPerSlice);
+    const int runs = std::min(count, missed_runs);
     int i = 0;
     for (int run = 0; run < runs; ++run) {
       const int first = run * count / runs, size = (run + 1) * count / runs - first;
@@ -481,8 +482,8 @@ struct SliceTracer {
 }  // namespace
 
 WeightedHits trace_slices(const GBuffer& g, const TraceGrid& grid, const GiSettings& settings,
-                          const MissModel& misses, MissedRays* missed) {
-  const SliceTracer tracer(g, grid, settings, misses);
+                          const MissModel& misses, MissedRays* missed, int missed_runs) {
+  const SliceTracer tracer(g, grid, settings, misses, missed_runs);
   WeightedHits hits;
   hits.miss = Image(grid.width, grid.height, 1);
   hits.env = Image(grid.width, grid.height, 3);
