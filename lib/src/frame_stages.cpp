@@ -192,9 +192,9 @@ LitViews FrameStages::light_views(const std::vector<GBuffer>& views) const {
   out.light.resize(n);
   std::vector<std::string> notes(n);
   parallel_for_rows(static_cast<int>(n), [&](int i) {
-    out.light[i] = held_at_zero(
+    out.light[i] =
         denoise_on_grid(views[i], trace(views[i], nullptr, nullptr, &out.traces[i], nullptr,
-                                        nullptr, nullptr, nullptr, &notes[i], kViewRunsPerSlice)));
+                                        nullptr, nullptr, nullptr, &notes[i], kViewRunsPerSlice));
   });
   for (std::size_t i = 0; i < n; ++i)
     log_info("frame " + std::to_string(views[i].frame) + ": view " + std::to_string(i + 1) + ": " +

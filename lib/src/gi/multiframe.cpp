@@ -129,6 +129,13 @@ struct Found {
   float light[3] = {0, 0, 0}, sky[3] = {0, 0, 0}, env[3] = {0, 0, 0}, cube[kCubeFaces] = {};
   float miss = 0;
 
+  // Ray `ray`, found or known to reach the sky, is no longer left to `misses`: its shares of it,
+  // as the miss model gives them for its direction.
+  void take_shares(const MissModel& misses, const MissedRay& ray) {
+    misses.add(ray.direction, ray.weight, env, cube);
+    miss += ray.weight;
+  }
+
   // Into sample s: the light added to `foreign`, the shares taken out of `env`, `cube` and
   // `miss`, the sky's light added to `env` (the environment's light, as the misses' is). The
   // tracer summed the shares over its bins of equal angle, and a ray's stand for its whole run
@@ -487,9 +494,8 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
           // Met nothing any view shows, where a view shows the sky: it reaches the sky.
           if (!best && !was_refused && !std::isinf(t_from) &&
               shows_sky(neighbours, ray.direction)) {
-            self.misses.add(ray.direction, ray.weight, found_here->env, found_here->cube);
+            found_here->take_shares(self.misses, ray);
             self.misses.add_sky(ray.direction, ray.weight, found_here->sky);
-            found_here->miss += ray.weight;
             ++row_sky;
             return;
           }
@@ -507,8 +513,7 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
             found_by_row[by].push_back({best->index, best_hit, ray.weight});
             ++found_count[s];
           }
-          self.misses.add(ray.direction, ray.weight, found_here->env, found_here->cube);
-          found_here->miss += ray.weight;
+          found_here->take_shares(self.misses, ray);
           ++row_found;
         });
     rays += row_rays;
@@ -627,8 +632,7 @@ bool continue_rays(const std::vector<const FrameTrace*>& frames,
               continue;
             }
             add_hit_light(*n.view->trace, n.view->light, hit, ray.weight, found_here->light);
-            self.misses.add(ray.direction, ray.weight, found_here->env, found_here->cube);
-            found_here->miss += ray.weight;
+            found_here->take_shares(self.misses, ray);
             ++row_found;
             refused = false;
             break;
