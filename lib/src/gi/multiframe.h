@@ -49,8 +49,8 @@ using PixelMisses = std::vector<MissedRay>;
 // they are (a sample's can fall below zero; the light is held at zero once denoised, FrameStages):
 // the light is then the same in the mean for any count of rays, and one ray per slice continues
 // half the rays of two at the same error. Six faces on the training set, 64 samples
-// (tests/accuracy/views.sh): mean relRMSE 0.374 with one, 0.373 with two; with each share held at
-// zero, 0.399 and 0.376, the mean level 14% and 6% higher. --multiframe holds each share at zero
+// (tests/accuracy/views.sh): mean relRMSE 0.375 with one, 0.374 with two; with each share held at
+// zero, 0.423 and 0.386, the mean level 17% and 7% higher. --multiframe holds each share at zero
 // and keeps two: its neighbours find few of its rays (the shares as they are: mean relRMSE 0.404
 // either way, level 1.004 against 1.012).
 constexpr int kViewRunsPerSlice = 1;
