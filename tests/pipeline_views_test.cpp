@@ -411,8 +411,8 @@ TEST(Views, MissedRaysKnowWhereTheyPassBehindWhatTheFrameShows) {
   const int w = g.width(), h = g.height();
   for (int y = 2 * h / 5; y < 11 * h / 20; ++y)
     for (int x = 0; x < w; ++x) g.depth.at(0, x, y) = static_cast<float>(kFront / 2);
-  const detail::TraceGrid grid = detail::make_trace_grid(g, detail::reflected_radiance(g, false), 1,
-                                                         static_cast<float>(s.thickness));
+  const detail::TraceGrid grid =
+      detail::make_trace_grid(g, false, 1, static_cast<float>(s.thickness));
   const detail::Environment env;
   const detail::MissModel misses(g, s.miss, env);
   detail::MissedRays missed;

@@ -284,9 +284,8 @@ TEST(Reference, BoundedHitsGiveTheLightOfAllHitsHeld) {
   s.miss = MissMode::kFrame;
   const Frame f = load("sample/sample.0001.exr", s);
   const detail::Environment env(s.env_color);
-  const Image reflected = detail::reflected_radiance(f.g, false);
   const detail::TraceGrid grid =
-      detail::make_trace_grid(f.g, reflected, 1, static_cast<float>(s.thickness));
+      detail::make_trace_grid(f.g, false, 1, static_cast<float>(s.thickness));
   const detail::MissModel misses(f.g, s.miss, env);
   const Image held = detail::gather_bounces(
       grid, detail::weighted_from_rays(grid, detail::trace_reference(f.g, s, misses)), s.bounces,

@@ -111,9 +111,8 @@ Image FrameStages::trace(const GBuffer& g, GBuffer* grid_out, Image* coverage,
                          Image* reflected_out, const LitViews* views, std::string* misses_note,
                          int kept_runs) const {
   const GiSettings& s = settings_;
-  const Image reflected = reflected_radiance(g, plan_.gather_emission);
   TraceGrid grid =
-      make_trace_grid(g, reflected, plan_.trace_scale, static_cast<float>(s.thickness));
+      make_trace_grid(g, plan_.gather_emission, plan_.trace_scale, static_cast<float>(s.thickness));
   const MissModel misses(g, s.miss, env_);
   if (reflected_out) *reflected_out = grid.reflected;
   if (misses_note)

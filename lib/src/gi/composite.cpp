@@ -14,32 +14,6 @@ float finite(float v) {
   return std::isfinite(v) ? v : (std::isnan(v) ? 0.0f : std::copysign(3e38f, v));
 }
 
-}  // namespace
-
-Image reflected_radiance(const GBuffer& g, bool with_emission) {
-  const int w = g.width(), h = g.height();
-  Image out(w, h, 3);
-  const bool emission = with_emission && !g.emission.empty();
-  parallel_for_rows(h, [&](int y) {
-    const std::size_t row = static_cast<std::size_t>(y) * w;
-    const float* depth = g.depth.plane(0) + row;
-    for (int c = 0; c < 3; ++c) {
-      const float* direct = g.direct.plane(c) + row;
-      const float* emitted = emission ? g.emission.plane(c) + row : nullptr;
-      float* o = out.plane(c) + row;
-      for (int x = 0; x < w; ++x) {
-        // Negative light (a renderer's denoiser can leave some) is not a source.
-        float v = std::max(0.0f, direct[x]);
-        if (emitted) v += std::max(0.0f, emitted[x]);
-        o[x] = std::isfinite(depth[x]) ? v : 0.0f;
-      }
-    }
-  });
-  return out;
-}
-
-namespace {
-
 // The composite of `g` with its albedo and beauty `albedo` and `beauty` (g's own, or r->gi and
 // r->composite holding them: each pixel's passes are read before its results are written over
 // them) into r->gi and r->composite.

@@ -16,8 +16,4 @@ FrameResult composite_frame(const GBuffer& g, Image indirect, Image coverage = {
 // besides the frame's own. Leaves *g without albedo and beauty.
 FrameResult composite_frame_in_place(GBuffer* g, Image indirect, Image coverage = {});
 
-// The light a surface reflects towards others: direct (albedo included), plus emission when
-// `with_emission`; 0 on background.
-Image reflected_radiance(const GBuffer& g, bool with_emission);
-
 }  // namespace ssgi::detail

@@ -11,7 +11,7 @@
 
 namespace ssgi::detail {
 
-TraceGrid make_trace_grid(const GBuffer& g, const Image& reflected, int scale, float thickness) {
+TraceGrid make_trace_grid(const GBuffer& g, bool with_emission, int scale, float thickness) {
   TraceGrid grid;
   const int w = g.width(), h = g.height();
   assert(scale >= 1 && scale <= 8);  // a block's depths fit make_trace_grid's array
@@ -31,6 +31,15 @@ TraceGrid make_trace_grid(const GBuffer& g, const Image& reflected, int scale, f
   grid.reflected = Image(grid.width, grid.height, 3);
   grid.albedo = Image(grid.width, grid.height, 3);
   const float* depth = g.depth.plane(0);
+  // The light a surface reflects towards others, read where a sample needs it rather than kept
+  // for the whole frame: direct (albedo included), plus emission. Negative light (a renderer's
+  // denoiser can leave some) is not a source.
+  const bool emission = with_emission && !g.emission.empty();
+  auto reflected = [&](int c, int p) {
+    float v = std::max(0.0f, g.direct.plane(c)[p]);
+    if (emission) v += std::max(0.0f, g.emission.plane(c)[p]);
+    return v;
+  };
   parallel_for_rows(grid.height, [&](int by) {
     // A block's finite depths, kept sorted as they come: at most 8 x 8, where insertion costs
     // less than a selection algorithm.
@@ -73,7 +82,7 @@ TraceGrid make_trace_grid(const GBuffer& g, const Image& reflected, int scale, f
       if (scale == 1) {
         grid.depth.plane(0)[s] = best_z;
         for (int c = 0; c < 3; ++c) {
-          grid.reflected.plane(c)[s] = reflected.plane(c)[best];
+          grid.reflected.plane(c)[s] = reflected(c, best);
           grid.albedo.plane(c)[s] = std::clamp(g.albedo.plane(c)[best], 0.0f, 1.0f);
         }
         continue;
@@ -99,7 +108,7 @@ TraceGrid make_trace_grid(const GBuffer& g, const Image& reflected, int scale, f
           const float z = depth[p];
           if (!(std::fabs(z - best_z) <= thickness * best_z)) continue;
           for (int c = 0; c < 3; ++c) {
-            sum[c] += reflected.plane(c)[p];
+            sum[c] += reflected(c, p);
             sum[3 + c] += std::clamp(g.albedo.plane(c)[p], 0.0f, 1.0f);
           }
           ++count;

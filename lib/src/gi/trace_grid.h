@@ -33,10 +33,10 @@ struct TraceGrid {
   float fx = 1, fy = 1, cx = 0, cy = 0;
 };
 
-// The grid of trace origins for `g` at `scale`, with what rays meet there; `reflected` is the
-// light the frame's surfaces reflect (composite.h); a block's pixels within `thickness` x depth
-// of its origin's are on its surface.
-TraceGrid make_trace_grid(const GBuffer& g, const Image& reflected, int scale, float thickness);
+// The grid of trace origins for `g` at `scale`, with what rays meet there: the light its
+// surfaces reflect is their direct light, plus their emission when `with_emission`; a block's
+// pixels within `thickness` x depth of its origin's are on its surface.
+TraceGrid make_trace_grid(const GBuffer& g, bool with_emission, int scale, float thickness);
 
 // Entries the trace samples made row by row in parallel, joined in trace-sample order: row by's
 // entries rows[by] are count(by, bx) for each sample bx of the row, one after the other. `out`
