@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <vector>
 
@@ -106,13 +107,13 @@ MissModel::MissModel(const GBuffer& g, MissMode mode, const Environment& env)
   // The display window's columns in bands, for the most open side.
   constexpr int kBands = 8;
   // Each lattice point's terms, worked out in parallel; the sums below take them in the
-  // lattice's order, so that they are the same bits for any thread count.
+  // lattice's order, so that they are the same bits for any thread count. A point is kept to
+  // what the sums need (24 bytes: the lattice is fresh memory every frame, 2 MB at 1080p).
   struct Point {
-    int bin, band;
-    bool surface;
     double border;
-    int face[3];
-    double facing[3];
+    float along[3];  // the normal along each cube axis
+    std::uint8_t bin, band;
+    bool surface;
   };
   const int columns = (w - stride / 2 + stride - 1) / stride;
   const int rows = (h - stride / 2 + stride - 1) / stride;
@@ -124,20 +125,16 @@ MissModel::MissModel(const GBuffer& g, MissMode mode, const Environment& env)
       Point& pt = lattice[static_cast<std::size_t>(j) * columns + i];
       const Imath::V3d v = cam.view_dir(offset_x_ + x + 0.5, offset_y_ + y + 0.5);
       const float e = static_cast<float>(v.x * up_.x + v.y * up_.y + v.z * up_.z);
-      pt.bin =
-          std::clamp(static_cast<int>((e + 1.0f) * 0.5f * kElevationBins), 0, kElevationBins - 1);
-      pt.band =
-          std::clamp(static_cast<int>((offset_x_ + x + 0.5) / display_w_ * kBands), 0, kBands - 1);
+      pt.bin = static_cast<std::uint8_t>(
+          std::clamp(static_cast<int>((e + 1.0f) * 0.5f * kElevationBins), 0, kElevationBins - 1));
+      pt.band = static_cast<std::uint8_t>(
+          std::clamp(static_cast<int>((offset_x_ + x + 0.5) / display_w_ * kBands), 0, kBands - 1));
       pt.surface = g.is_surface(x, y);
       if (!pt.surface) continue;
-      const double b = border_weight(offset_x_ + x + 0.5, offset_y_ + y + 0.5);
       const float n[3] = {g.normal.at(0, x, y), g.normal.at(1, x, y), g.normal.at(2, x, y)};
-      for (int a = 0; a < 3; ++a) {
-        const float along = n[0] * axis_[a].x + n[1] * axis_[a].y + n[2] * axis_[a].z;
-        pt.face[a] = 2 * a + (along <= 0 ? 0 : 1);
-        pt.facing[a] = b * along * along;
-      }
-      pt.border = b;
+      for (int a = 0; a < 3; ++a)
+        pt.along[a] = n[0] * axis_[a].x + n[1] * axis_[a].y + n[2] * axis_[a].z;
+      pt.border = border_weight(offset_x_ + x + 0.5, offset_y_ + y + 0.5);
     }
   });
   std::array<std::array<double, kElevationBins>, kBands> band_sky{}, band_count{};
@@ -151,7 +148,10 @@ MissModel::MissModel(const GBuffer& g, MissMode mode, const Environment& env)
       band_sky[pt.band][pt.bin] += 1;
       continue;
     }
-    for (int a = 0; a < 3; ++a) facing[pt.face[a]] += pt.facing[a];
+    for (int a = 0; a < 3; ++a) {
+      const float along = pt.along[a];
+      facing[2 * a + (along <= 0 ? 0 : 1)] += pt.border * along * along;
+    }
     border_total += pt.border;
   }
   std::array<double, kElevationBins> share{};
