@@ -211,8 +211,8 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
   if (plan.temporal == TemporalMode::kEma) ring_frames = 2;
   const std::uint64_t ring = ring_frames * frame_grid + waiting * planes(read - motion, pixels);
 
-  // Tracing: the reflected light and the trace grid (10 planes and origins), the tracer's
-  // hits, then the bounces' light (4 + 3 + 3 planes).
+  // Tracing: the trace grid (10 planes and origins), the tracer's hits, then the bounces'
+  // light (4 + 3 + 3 planes).
   std::uint64_t tracer = 0;
   switch (s.tracer) {
     case Tracer::kSlices:  // at most 32 sectors a slice, each hit 8 bytes, and 20 per sample
@@ -232,7 +232,7 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
       break;
     }
   }
-  const std::uint64_t tracing = planes(3, pixels) + planes(11, grid) + tracer + planes(10, grid);
+  const std::uint64_t tracing = planes(11, grid) + tracer + planes(10, grid);
   // Multiframe: every frame of the ring keeps its trace grid (11 planes and origins); the
   // frames not yet finished their hits too (as the tracer's) and their missed rays (8 groups of
   // sectors a slice, 16 bytes each, and a 12-byte origin and 4-byte start per sample); while a
