@@ -5,6 +5,7 @@
 #include <cassert>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 #include "gi/misses.h"
 #include "gi/surface_model.h"
@@ -59,10 +60,11 @@ class HeldHits final : public HitSource {
 // One gather: the light `radiance(hit)` of every hit, plus the misses' environment light and
 // their cube shares x the cube's colours; with `coverage`, the hits' share of it there
 // (gather_bounces).
+// Written into `out` (3 channels of the grid's size) where the grid has an origin; the rest of
+// it is left as it is.
 template <typename Radiance>
-Image gather_once(const TraceGrid& grid, const HitSource& hits, const Radiance& radiance,
-                  const CubeLight& cube, Image* coverage = nullptr) {
-  Image out(grid.width, grid.height, 3);
+void gather_once(const TraceGrid& grid, const HitSource& hits, const Radiance& radiance,
+                 const CubeLight& cube, Image* out, Image* coverage = nullptr) {
   if (coverage) *coverage = Image(grid.width, grid.height, 1, -1.0f);
   parallel_for_rows(grid.height, [&](int by) {
     HitScratch scratch;
@@ -105,7 +107,7 @@ Image gather_once(const TraceGrid& grid, const HitSource& hits, const Radiance& 
           for (int c = 0; c < 3; ++c) sum[c] += weight * l[c];
         }
       }
-      for (int c = 0; c < 3; ++c) out.plane(c)[s] = sum[c];
+      for (int c = 0; c < 3; ++c) out->plane(c)[s] = sum[c];
       if (coverage) {
         const float total = from_hits + (missed[0] + missed[1] + missed[2]);
         coverage->plane(0)[s] = total > 0 && std::isfinite(total)
@@ -114,7 +116,6 @@ Image gather_once(const TraceGrid& grid, const HitSource& hits, const Radiance& 
       }
     }
   });
-  return out;
 }
 
 }  // namespace
@@ -204,43 +205,51 @@ Image coverage_to_frame(const Image& grid_coverage, const Image& grid_depth,
 
 Image gather_bounces(const TraceGrid& grid, const HitSource& hits, int bounces,
                      const MissModel& misses, Image* coverage, CubeLight* last_cube) {
-  // Each bounce's light per trace sample, packed RGB_ so that a hit is one 16-byte load: at s
-  // the light of its front (what it reflects plus albedo x its indirect light), at n + s that of
-  // its unseen back (albedo x indirect only), which the few hits from behind bring
-  // (surface_model.h). The fronts lie together, so that the part the hits read at random is half
-  // the table: 2 MB at a 1080p frame's 480 x 270 grid rather than 4 MB with fronts and backs
-  // interleaved (its 8 bounces on 2 threads 41 -> 37 ms, `SSGI_BENCH_THREADS=2
-  // build/bin/bench_stages --benchmark_filter=Bounces` on a rendered frame).
+  // Each bounce's light per trace sample as a hit on its lit front brings it (what it reflects
+  // plus albedo x its indirect light), packed RGB_ so that such a hit is one 16-byte load: 2 MB
+  // at a 1080p frame's 480 x 270 grid, read at random. The few hits from behind bring its unseen
+  // back (albedo x indirect only: surface_model.h), the same product of the grid's albedo and
+  // the bounce before's light taken where they are read: a table of the backs beside the fronts
+  // would double the fresh memory each frame and each bounce's writes for those few hits.
   const std::size_t n = grid.origin.size();
-  UninitializedVector<std::array<float, 4>> light(2 * n);
+  UninitializedVector<std::array<float, 4>> light(n);
   parallel_for_rows(grid.height, [&](int by) {
     for (int bx = 0; bx < grid.width; ++bx) {
       const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
       light[s] = {grid.reflected.plane(0)[s], grid.reflected.plane(1)[s],
                   grid.reflected.plane(2)[s], 0.0f};
-      light[n + s] = {0.0f, 0.0f, 0.0f, 0.0f};
     }
   });
+  // The light of the bounce before and the one being gathered, swapped after each bounce; 0
+  // where the grid has no origin, which no gather writes.
+  Image indirect(grid.width, grid.height, 3), next(grid.width, grid.height, 3);
+  bool first = true;  // no bounce before: the backs are dark
   auto lookup = [&](std::int32_t hit) {
-    const std::array<float, 4>& l =
-        light[static_cast<std::size_t>(hit_pixel(hit)) + (hit >= kSeenFromBehind ? n : 0)];
+    if (hit >= kSeenFromBehind) {
+      const std::size_t s = static_cast<std::size_t>(hit_pixel(hit));
+      if (first) return std::array<float, 3>{0.0f, 0.0f, 0.0f};
+      return std::array<float, 3>{grid.albedo.plane(0)[s] * indirect.plane(0)[s],
+                                  grid.albedo.plane(1)[s] * indirect.plane(1)[s],
+                                  grid.albedo.plane(2)[s] * indirect.plane(2)[s]};
+    }
+    const std::array<float, 4>& l = light[static_cast<std::size_t>(hit)];
     return std::array<float, 3>{l[0], l[1], l[2]};
   };
   CubeLight cube = misses.cube_light(grid, light.data());
-  Image indirect = gather_once(grid, hits, lookup, cube, bounces == 1 ? coverage : nullptr);
+  gather_once(grid, hits, lookup, cube, &next, bounces == 1 ? coverage : nullptr);
+  std::swap(indirect, next);
+  first = false;
   for (int b = 1; b < bounces; ++b) {
     parallel_for_rows(grid.height, [&](int by) {
       for (int bx = 0; bx < grid.width; ++bx) {
         const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
-        for (int c = 0; c < 3; ++c) {
-          const float back = grid.albedo.plane(c)[s] * indirect.plane(c)[s];
-          light[s][c] = grid.reflected.plane(c)[s] + back;
-          light[n + s][c] = back;
-        }
+        for (int c = 0; c < 3; ++c)
+          light[s][c] = grid.reflected.plane(c)[s] + grid.albedo.plane(c)[s] * indirect.plane(c)[s];
       }
     });
     cube = misses.cube_light(grid, light.data());
-    indirect = gather_once(grid, hits, lookup, cube, b + 1 == bounces ? coverage : nullptr);
+    gather_once(grid, hits, lookup, cube, &next, b + 1 == bounces ? coverage : nullptr);
+    std::swap(indirect, next);
   }
   if (last_cube) *last_cube = cube;
   return indirect;

@@ -183,6 +183,17 @@ PixelHits& pixel_hits() {
   return hits;
 }
 
+// A row's hits while it is traced.
+struct RowStage {
+  std::vector<std::int32_t> pixels;
+  std::vector<float> weights;
+};
+
+RowStage& row_stage() {
+  thread_local RowStage stage;
+  return stage;
+}
+
 struct SliceTracer {
   const GBuffer& g;
   const TraceGrid& grid;
@@ -498,8 +509,14 @@ WeightedHits trace_slices(const GBuffer& g, const TraceGrid& grid, const GiSetti
   if (missed) missed->origin.assign(grid.origin.size(), Imath::V3f{0, 0, 0});
   parallel_for_rows(grid.height, [&](int by) {
     if (missed) row_missed_counts[by].assign(grid.width, 0);
-    std::vector<std::int32_t>& px = row_pixels[by];
-    std::vector<float>& wt = row_weights[by];
+    // The row's hits grow in this thread's staging vectors, which keep their room from row to
+    // row, and are copied out once at their size: a row's vectors grown hit by hit took a
+    // dozen fresh blocks each.
+    RowStage& stage = row_stage();
+    std::vector<std::int32_t>& px = stage.pixels;
+    std::vector<float>& wt = stage.weights;
+    px.clear();
+    wt.clear();
     std::vector<std::uint32_t>& counts = row_counts[by];
     counts.assign(grid.width, 0);
     for (int bx = 0; bx < grid.width; ++bx) {
@@ -519,6 +536,8 @@ WeightedHits trace_slices(const GBuffer& g, const TraceGrid& grid, const GiSetti
       for (int c = 0; c < 3; ++c) hits.env.plane(c)[s] = env_light[c];
       for (int f = 0; f < kCubeFaces; ++f) hits.cube.plane(f)[s] = cube[f];
     }
+    row_pixels[by].assign(px.begin(), px.end());
+    row_weights[by].assign(wt.begin(), wt.end());
   });
   join_rows(
       grid, row_pixels, [&](int by, int bx) { return row_counts[by][bx]; }, &hits.begin,
