@@ -510,8 +510,8 @@ WeightedHits trace_slices(const GBuffer& g, const TraceGrid& grid, const GiSetti
   parallel_for_rows(grid.height, [&](int by) {
     if (missed) row_missed_counts[by].assign(grid.width, 0);
     // The row's hits grow in this thread's staging vectors, which keep their room from row to
-    // row, and are copied out once at their size: a row's vectors grown hit by hit took a
-    // dozen fresh blocks each.
+    // row, and are copied out once at their size: the row's own vectors grown hit by hit would
+    // take a dozen fresh blocks each.
     RowStage& stage = row_stage();
     std::vector<std::int32_t>& px = stage.pixels;
     std::vector<float>& wt = stage.weights;
