@@ -2,6 +2,7 @@
 #pragma once
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_pipeline.h>
@@ -21,6 +22,11 @@ void parallel_for_rows(int rows, const Body& body) {
     for (int y = r.begin(); y < r.end(); ++y) body(y);
   });
 }
+
+// One T for each thread that asks for it in a parallel loop (local()), each made on its first
+// use in that thread; all of them visited afterwards by iterating.
+template <typename T>
+using PerThread = tbb::enumerable_thread_specific<T>;
 
 // Sets the `count` values from `first` on to `value`, in parallel blocks: filling (and first
 // touching the pages of) a frame-sized buffer on one thread is a serial part of the frame.

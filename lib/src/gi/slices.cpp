@@ -501,8 +501,8 @@ WeightedHits trace_slices(const GBuffer& g, const TraceGrid& grid, const GiSetti
   hits.cube = Image(grid.width, grid.height, kCubeFaces);
   // Each row collects its hits apart; joined in row order, so the result is the same for any
   // thread count.
-  std::vector<std::vector<std::int32_t>> row_pixels(grid.height);
-  std::vector<std::vector<float>> row_weights(grid.height);
+  RowEntries<std::int32_t> row_pixels(grid.height);
+  RowEntries<float> row_weights(grid.height);
   std::vector<std::vector<std::uint32_t>> row_counts(grid.height);
   std::vector<PixelMisses> row_missed(missed ? grid.height : 0);
   std::vector<std::vector<std::uint32_t>> row_missed_counts(row_missed.size());
@@ -510,8 +510,8 @@ WeightedHits trace_slices(const GBuffer& g, const TraceGrid& grid, const GiSetti
   parallel_for_rows(grid.height, [&](int by) {
     if (missed) row_missed_counts[by].assign(grid.width, 0);
     // The row's hits grow in this thread's staging vectors, which keep their room from row to
-    // row, and are copied out once at their size: the row's own vectors grown hit by hit would
-    // take a dozen fresh blocks each.
+    // row, and are copied out once, into the thread's blocks (RowEntries): the row's own
+    // vectors grown hit by hit would take a dozen fresh blocks each.
     RowStage& stage = row_stage();
     std::vector<std::int32_t>& px = stage.pixels;
     std::vector<float>& wt = stage.weights;
@@ -536,8 +536,8 @@ WeightedHits trace_slices(const GBuffer& g, const TraceGrid& grid, const GiSetti
       for (int c = 0; c < 3; ++c) hits.env.plane(c)[s] = env_light[c];
       for (int f = 0; f < kCubeFaces; ++f) hits.cube.plane(f)[s] = cube[f];
     }
-    row_pixels[by].assign(px.begin(), px.end());
-    row_weights[by].assign(wt.begin(), wt.end());
+    row_pixels.put(by, px.data(), px.size());
+    row_weights.put(by, wt.data(), wt.size());
   });
   join_rows(
       grid, row_pixels, [&](int by, int bx) { return row_counts[by][bx]; }, &hits.begin,

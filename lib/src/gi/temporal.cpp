@@ -430,8 +430,17 @@ Image temporal_window(const std::vector<const GBuffer*>& frames,
   // the window is the exact mean up to one rounding), always in ascending frame order: the same
   // additions in the same order whatever else the ring holds.
   const std::size_t n = out.plane_size();
-  std::vector<double> sum(out.data().begin(), out.data().end());
-  std::vector<int> frames_used(n, 1);
+  // Started in parallel: copied on one thread, the sums' first touch (3 MB at a 480 x 270 trace
+  // grid, in 4 KB pages) is a serial part of every frame.
+  UninitializedVector<double> sum(3 * n);
+  UninitializedVector<int> frames_used(n);
+  parallel_for_rows(current.height(), [&](int y) {
+    for (int x = 0; x < current.width(); ++x) {
+      const std::size_t i = index(out, x, y);
+      for (int c = 0; c < 3; ++c) sum[c * n + i] = out.plane(c)[i];
+      frames_used[i] = 1;
+    }
+  });
   const Image boxes = clip_boxes(current, out);
   for (int k = 0; k < count; ++k) {
     if (k == center || std::abs(frames[k]->frame - current.frame) > radius) continue;
