@@ -6,6 +6,7 @@
 // back wall (its rays leave the frame behind the camera); six cube faces rendered at the camera,
 // or one lat-long panorama turned into them, do.
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <functional>
@@ -182,6 +183,44 @@ Means inner_means(const Image& light, const Image& coverage) {
   return m;
 }
 
+// The mean over the cosine-weighted hemisphere of point p with normal n of what `along(p, d)`
+// says a ray along d brings, by a stratified quadrature (Malley's method: a uniform grid on the
+// disc, lifted to the hemisphere).
+template <typename Along>
+double hemisphere_light(const Imath::V3d& p, const Imath::V3d& n, const Along& along) {
+  const Imath::V3d u =
+      (std::fabs(n.x) < 0.5 ? Imath::V3d(1, 0, 0) : Imath::V3d(0, 1, 0)).cross(n).normalized();
+  const Imath::V3d v = n.cross(u);
+  constexpr int kGrid = 32;
+  double light = 0;
+  for (int i = 0; i < kGrid; ++i)
+    for (int j = 0; j < kGrid; ++j) {
+      const double r = std::sqrt((i + 0.5) / kGrid), phi = 2 * M_PI * (j + 0.5) / kGrid;
+      const Imath::V3d d =
+          u * (r * std::cos(phi)) + v * (r * std::sin(phi)) + n * std::sqrt(1 - r * r);
+      light += along(p, d);
+    }
+  return light / (kGrid * kGrid);
+}
+
+// The mean indirect light over the frame's inner half (as inner_means) and what it should be
+// there: at every fourth pixel each way, `expected(p)` at the front wall's point p.
+template <typename Expected>
+std::array<double, 2> inner_light_and_expected(const GBuffer& g, const Image& light,
+                                               const Expected& expected) {
+  double got = 0, want = 0;
+  int n = 0;
+  const int w = g.width(), h = g.height();
+  for (int y = h / 4; y < 3 * h / 4; y += 4)
+    for (int x = w / 4; x < 3 * w / 4; x += 4) {
+      const Imath::V3d d = world_direction(g.camera, x + 0.5, y + 0.5);
+      got += light.at(0, x, y);
+      want += expected(d * (kFront / d.z));
+      ++n;
+    }
+  return {got / n, want / n};
+}
+
 TEST(Views, LightBehindTheCameraIsFoundInCubeFacesAndALatLong) {
   const GiSettings s = view_settings();
   const Shot shot(s);
@@ -251,6 +290,135 @@ TEST(Views, RaysThatTheViewsShowTheSkyForTakeTheEnvironment) {
   EXPECT_NEAR(cube.light / kSky, 1.0, 0.10);
 }
 
+// A ray that passes behind something the views show and meets nothing they show takes what lay
+// behind it where it was last seen (continue_in_views). Behind the camera, a dark ledge at z =
+// -kLedge across the rows kLedgeLow..kLedgeHigh hides part of the lit back wall from the camera:
+// rays from the front wall that pass above the ledge meet the back wall there, hidden. Last seen
+// in front of the back wall, heading for it, they take its light; the miss model (black here)
+// would give them none. Every ray of the front wall's hemisphere meets the ledge (dark) or the
+// back wall (kLit): its light is kLit times the share that meets the back wall.
+constexpr double kLedge = 0.5, kLedgeLow = 0.1, kLedgeHigh = 0.6;
+
+WallHit ledge_from(const Imath::V3d& p, const Imath::V3d& d) {
+  WallHit w;
+  if (d.z > 1e-12) {
+    w.t = (kFront - p.z) / d.z;
+    w.normal = {0, 0, -1};
+    return w;
+  }
+  if (!(d.z < -1e-12)) return w;
+  if (p.z > -kLedge) {
+    const double t = (-kLedge - p.z) / d.z, y = p.y + t * d.y;
+    if (y >= kLedgeLow && y <= kLedgeHigh) {
+      w.t = t;
+      w.normal = {0, 0, 1};
+      return w;
+    }
+  }
+  w.t = (-kBack - p.z) / d.z;
+  w.normal = {0, 0, 1};
+  w.reflected = kLit;
+  return w;
+}
+
+TEST(Views, RaysHiddenBehindWhatTheViewsShowTakeTheSurfaceTheyWereHeadingFor) {
+  const GiSettings s = view_settings();
+  const Shot shot(s);
+  const GBuffer& g = shot.f.g;
+  const detail::FrameStages with(shot.with_views({Projection::kPinhole}), s);
+  const detail::LitViews faces =
+      with.light_views(numbered(cube_faces(64,
+                                           [](const Imath::V3d& d) {
+                                             return ledge_from({0, 0, 0}, d);
+                                           }),
+                                g.frame));
+  Image coverage;
+  const Image light = with.indirect_light(g, &coverage, &faces);
+  const auto [got, expected] = inner_light_and_expected(g, light, [](const Imath::V3d& p) {
+    return hemisphere_light(p, {0, 0, -1}, [](const Imath::V3d& o, const Imath::V3d& d) {
+      return static_cast<double>(ledge_from(o, d).reflected);
+    });
+  });
+  // The share that meets the back wall where the camera sees it, and where the ledge hides it.
+  const double hidden =
+      hemisphere_light({0, 0, kFront}, {0, 0, -1}, [](const Imath::V3d& o, const Imath::V3d& d) {
+        const WallHit w = ledge_from(o, d);
+        if (!(w.reflected > 0)) return 0.0;
+        const Imath::V3d at = o + w.t * d;
+        const double seen = at.y / -at.z;
+        return seen >= kLedgeLow / kLedge && seen <= kLedgeHigh / kLedge ? 1.0 : 0.0;
+      });
+  std::printf(
+      "six faces: indirect %.4f, expected %.4f (%.0f%% of the front wall's centre's rays "
+      "meet the back wall where the ledge hides it)\n",
+      got, expected, 100 * hidden);
+  ASSERT_GT(hidden, 0.1);
+  EXPECT_NEAR(got / expected, 1.0, 0.05);
+}
+
+// A ray that meets nothing any view shows, last seen rising in front of the sky, reaches it
+// although the view at its vanishing point shows a surface: the sky over a parapet behind the
+// camera, seen from the front wall, lies in directions in which the camera sees the parapet. The
+// parapet (z = -kBack, lit) rises to kParapet above the camera; above it the sky, an environment
+// of one colour. The front wall's light is kLit and the sky's colour by their shares of its
+// hemisphere; the miss model (--miss frame) takes what the frame does not show for the dark
+// wall it shows.
+constexpr double kParapet = 2.0;
+constexpr float kSkyColour = 0.6f;
+
+WallHit parapet_from(const Imath::V3d& p, const Imath::V3d& d) {
+  WallHit w;
+  if (d.z > 1e-12) {
+    w.t = (kFront - p.z) / d.z;
+    w.normal = {0, 0, -1};
+  } else if (d.z < -1e-12) {
+    const double t = (-kBack - p.z) / d.z;
+    if (p.y + t * d.y <= kParapet) {
+      w.t = t;
+      w.normal = {0, 0, 1};
+      w.reflected = kLit;
+    }
+  }
+  return w;
+}
+
+TEST(Views, RaysLastSeenRisingInFrontOfTheSkyReachIt) {
+  GiSettings s = view_settings();
+  s.miss = MissMode::kFrame;
+  s.env_color = {kSkyColour, kSkyColour, kSkyColour};
+  const Shot shot(s);
+  const GBuffer& g = shot.f.g;
+  const detail::FrameStages with(shot.with_views({Projection::kPinhole}), s);
+  const detail::LitViews faces =
+      with.light_views(numbered(cube_faces(64,
+                                           [](const Imath::V3d& d) {
+                                             return parapet_from({0, 0, 0}, d);
+                                           }),
+                                g.frame));
+  Image coverage;
+  const Image light = with.indirect_light(g, &coverage, &faces);
+  auto along = [](const Imath::V3d& o, const Imath::V3d& d) {
+    const WallHit w = parapet_from(o, d);
+    return std::isinf(w.t) ? static_cast<double>(kSkyColour) : static_cast<double>(w.reflected);
+  };
+  const auto [got, expected] = inner_light_and_expected(g, light, [&](const Imath::V3d& p) {
+    return hemisphere_light(p, {0, 0, -1}, along);
+  });
+  // The share of the front wall's centre's rays that reach the sky in directions in which the
+  // camera sees the parapet.
+  const double over =
+      hemisphere_light({0, 0, kFront}, {0, 0, -1}, [](const Imath::V3d& o, const Imath::V3d& d) {
+        return d.z < 0 && std::isinf(parapet_from(o, d).t) && d.y / -d.z * kBack <= kParapet ? 1.0
+                                                                                             : 0.0;
+      });
+  std::printf(
+      "six faces: indirect %.4f, expected %.4f (%.0f%% of the front wall's centre's rays "
+      "reach the sky over the parapet where the camera sees the parapet)\n",
+      got, expected, 100 * over);
+  ASSERT_GT(over, 0.1);
+  EXPECT_NEAR(got / expected, 1.0, 0.05);
+}
+
 // A found ray takes its shares of the miss model out of its sample's (Found::apply): its own
 // direction's times its weight, which stand for its run of missed sectors in the mean but can
 // exceed what the sample holds on one cube face. The front wall lit, so that the miss model
@@ -310,22 +478,11 @@ WallHit room_from(const Imath::V3d& p, const Imath::V3d& d) {
 WallHit room(const Imath::V3d& d) { return room_from({0, 0, 0}, d); }
 
 // The one-bounce light at the room's point p with normal n: kFloorLit times the share of its
-// cosine-weighted hemisphere that meets the floor, by a stratified quadrature (Malley's method:
-// a uniform n x n grid on the disc, lifted to the hemisphere).
+// cosine-weighted hemisphere that meets the floor.
 double floor_share_light(const Imath::V3d& p, const Imath::V3d& n) {
-  const Imath::V3d u =
-      (std::fabs(n.x) < 0.5 ? Imath::V3d(1, 0, 0) : Imath::V3d(0, 1, 0)).cross(n).normalized();
-  const Imath::V3d v = n.cross(u);
-  constexpr int kGrid = 16;
-  double light = 0;
-  for (int i = 0; i < kGrid; ++i)
-    for (int j = 0; j < kGrid; ++j) {
-      const double r = std::sqrt((i + 0.5) / kGrid), phi = 2 * M_PI * (j + 0.5) / kGrid;
-      const Imath::V3d d =
-          u * (r * std::cos(phi)) + v * (r * std::sin(phi)) + n * std::sqrt(1 - r * r);
-      light += room_from(p, d).reflected;
-    }
-  return light / (kGrid * kGrid);
+  return hemisphere_light(p, n, [](const Imath::V3d& o, const Imath::V3d& d) {
+    return static_cast<double>(room_from(o, d).reflected);
+  });
 }
 
 // Every face's light with one bounce, against the quadrature at every fourth pixel each way. The

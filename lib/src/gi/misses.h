@@ -102,6 +102,9 @@ class MissModel {
     for (int c = 0; c < 3; ++c) light[c] += w * l[c];
   }
 
+  // The world's up axis in camera space.
+  const Imath::V3f& up() const { return up_; }
+
   // The share of the sky along camera-space unit direction `d`: the front's share by
   // elevation, turning into the one behind the camera as `d` turns away from the view (in
   // proportion to the cosine of its horizontal angle from straight back, none sideways).

@@ -322,6 +322,51 @@ bool shows_sky(const std::vector<Neighbour>& views, const Imath::V3f& d) {
   return false;
 }
 
+// Where a ray that meets no surface any view shows was last seen, and in front of what: of
+// kLastSeenSamples points along it, spread evenly in the angle under which the frame's camera
+// sees them (parameter |o| s / (1 - s) for s evenly in (0, 1)), the last one that the first view
+// holding it shows in front of the sky, or in front of a surface facing the ray. The ray passed
+// behind something after it, and nothing any view shows stopped it: what it meets lies hidden
+// behind that, and is taken to be what lay behind the ray where it was last seen, continued:
+// that surface, which the ray was heading for, or the sky. A surface that does not face the ray
+// (its own, a floor it rises from) tells nothing of what the ray meets.
+constexpr int kLastSeenSamples = 64;
+
+struct LastSeen {
+  const Neighbour* view = nullptr;  // null: never seen in front of the sky or such a surface
+  std::int32_t sample = -1;         // the surface's trace sample, or -1 for the sky
+};
+
+LastSeen last_seen(const std::vector<Neighbour>& views, const Imath::V3f& o, const Imath::V3f& d) {
+  LastSeen seen;
+  const float scale = o.length();
+  for (int k = 0; k < kLastSeenSamples; ++k) {
+    const float s = (static_cast<float>(k) + 0.5f) / kLastSeenSamples;
+    const Imath::V3f p = o + (scale * s / (1.0f - s)) * d;
+    for (const Neighbour& n : views) {
+      const Imath::V3f q = n.from_center.point(p);
+      if (!(q.z > 0)) continue;
+      const TraceGrid& g = n.view->trace->grid;
+      const float sx = g.cx + g.fx * q.x / q.z, sy = g.cy - g.fy * q.y / q.z;
+      if (!(sx >= 0 && sy >= 0 && sx < static_cast<float>(g.width) &&
+            sy < static_cast<float>(g.height)))
+        continue;
+      const std::size_t i = static_cast<std::size_t>(sy) * g.width + static_cast<std::size_t>(sx);
+      if (g.origin[i] < 0) {
+        seen = {&n, -1};
+      } else if (q.z < g.depth.plane(0)[i]) {
+        const Imath::V3f dn = n.from_center.direction(d);
+        if (dn.x * g.normal.plane(0)[i] + dn.y * g.normal.plane(1)[i] +
+                dn.z * g.normal.plane(2)[i] <
+            0)
+          seen = {&n, static_cast<std::int32_t>(i)};
+      }
+      break;
+    }
+  }
+  return seen;
+}
+
 // Whether the centre frame sees past camera-space point `x` (its own space): x projects onto its
 // grid in front of the surface it shows there by more than the slab, or onto its background.
 bool seen_past(const View& center, const Imath::V3f& x) {
@@ -397,7 +442,13 @@ std::string ViewsReport::describe(int frame) const {
   if (views == 0) return s.str() + "nothing continued (no view has a world transform)";
   s << rays << " missed rays continued in " << views << (views == 1 ? " view" : " views") << "; "
     << found << " met a surface";
-  if (sky) s << ", " << sky << " reached the sky (the views show nothing in their direction)";
+  if (sky)
+    s << ", " << sky
+      << " reached the sky (the views show it in their direction, or where they were last seen "
+         "rising)";
+  if (hidden)
+    s << ", " << hidden
+      << " passed behind what the views show and take the surface they were last seen heading for";
   if (refused) s << ", " << refused << " more met only surfaces the frame sees past (not taken)";
   return s.str();
 }
@@ -435,13 +486,13 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
   // The found rays, row by row, when asked for.
   std::vector<std::vector<ViewHit>> found_by_row(found_rays ? grid.height : 0);
   std::vector<std::uint32_t> found_count(found_rays ? grid.origin.size() : 0, 0);
-  std::atomic<std::size_t> rays{0}, found{0}, sky{0}, refused{0};
+  std::atomic<std::size_t> rays{0}, found{0}, sky{0}, hidden{0}, refused{0};
   struct Entering {
     float t;
     std::size_t n;
   };
   parallel_for_rows(grid.height, [&](int by) {
-    std::size_t row_rays = 0, row_found = 0, row_sky = 0, row_refused = 0;
+    std::size_t row_rays = 0, row_found = 0, row_sky = 0, row_hidden = 0, row_refused = 0;
     std::vector<Entering> entering;
     entering.reserve(count);
     // What the rays of one trace sample share, per view: their origin in its space and the
@@ -510,6 +561,25 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
             ++row_sky;
             return;
           }
+          // Met nothing any view shows: it takes what lay behind it where it was last seen, a
+          // surface it was heading for, or the sky if it rises (falling, it meets the ground or
+          // something on it, which the miss model stands for).
+          if (!best && !was_refused && !std::isinf(t_from)) {
+            const LastSeen seen = last_seen(neighbours, o, ray.direction);
+            if (seen.view && seen.sample < 0 && ray.direction.dot(self.misses.up()) > 0) {
+              found_here->take_shares(self.misses, ray);
+              self.misses.add_sky(ray.direction, ray.weight, found_here->sky);
+              ++row_sky;
+              return;
+            }
+            if (seen.view && seen.sample >= 0) {
+              add_hit_light(*seen.view->view->trace, seen.view->view->light, seen.sample,
+                            ray.weight, found_here->light);
+              found_here->take_shares(self.misses, ray);
+              ++row_hidden;
+              return;
+            }
+          }
           if (!best) {
             if (was_refused) ++row_refused;
             if (keep_missed) {
@@ -530,11 +600,13 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
     rays += row_rays;
     found += row_found;
     sky += row_sky;
+    hidden += row_hidden;
     refused += row_refused;
   });
   r.rays = rays;
   r.found = found;
   r.sky = sky;
+  r.hidden = hidden;
   r.refused = refused;
   if (!keep_missed) {
     self.missed = MissedRays();
@@ -553,7 +625,7 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
         grid, found_by_row,
         [&](int by, int bx) { return found_count[static_cast<std::size_t>(by) * grid.width + bx]; },
         &found_rays->begin, &found_rays->hits);
-  return r.found + r.sky > 0;
+  return r.found + r.sky + r.hidden > 0;
 }
 
 Image view_light(const FrameTrace& self, const ViewHits& found,

@@ -95,7 +95,9 @@ struct ViewsReport {
   int views = 0;            // views with a world transform (the others are not marched)
   std::size_t rays = 0;     // missed rays continued (not seen free to their vanishing point)
   std::size_t found = 0;    // of those, the ones that met a surface in a view
-  std::size_t sky = 0;      // the ones that met none where a view shows the sky (shows_sky)
+  std::size_t sky = 0;      // the ones that met none where a view shows the sky (shows_sky),
+                            // or rising, last seen in front of it (last_seen)
+  std::size_t hidden = 0;   // the ones that met none, last seen heading for a surface there
   std::size_t refused = 0;  // rays that met only surfaces the frame sees past (not taken)
   std::string describe(int frame) const;
 };
