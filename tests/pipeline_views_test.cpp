@@ -354,6 +354,67 @@ TEST(Views, RaysHiddenBehindWhatTheViewsShowTakeTheSurfaceTheyWereHeadingFor) {
       got, expected, 100 * hidden);
   ASSERT_GT(hidden, 0.1);
   EXPECT_NEAR(got / expected, 1.0, 0.05);
+
+  // No further than --max-distance: the back wall lies beyond it from every point of the front
+  // wall, so that no ray takes its light.
+  GiSettings near = s;
+  near.max_distance = 1.0;
+  const detail::FrameStages limited(shot.with_views({Projection::kPinhole}), near);
+  const detail::LitViews near_faces =
+      limited.light_views(numbered(cube_faces(64,
+                                              [](const Imath::V3d& d) {
+                                                return ledge_from({0, 0, 0}, d);
+                                              }),
+                                   g.frame));
+  const Means within = inner_means(limited.indirect_light(g, &coverage, &near_faces), coverage);
+  std::printf("--max-distance 1: indirect %.4f (expected 0)\n", within.light);
+  EXPECT_LT(within.light, 0.01 * kLit);
+}
+
+// The views light one another in passes (FrameStages::light_views): the first continues each
+// view's missed rays in the others (continue_in_views), the later ones bring the others' newer
+// light along the same rays (view_light), which must be what the first brought for the same
+// light, the rays that took a surface they were last seen heading for included. Each face of the
+// ledge scene lit alone keeps its missed rays; continued in the other faces, each face's light
+// from them against view_light's for the same rays and light.
+TEST(Views, LaterPassesAmongViewsBringWhatTheFirstFound) {
+  GiSettings s = view_settings();
+  s.bounces = 3;
+  const Shot shot(s);
+  const detail::FrameStages stages(shot.with_views({Projection::kPinhole}), s);
+  const std::vector<GBuffer> faces = numbered(cube_faces(64,
+                                                         [](const Imath::V3d& d) {
+                                                           return ledge_from({0, 0, 0}, d);
+                                                         }),
+                                              shot.f.g.frame);
+  std::vector<detail::LitViews> alone;
+  for (const GBuffer& face : faces) alone.push_back(stages.light_views({face}));
+  std::size_t hidden = 0;
+  for (std::size_t i = 0; i < faces.size(); ++i) {
+    std::vector<const detail::FrameTrace*> others;
+    std::vector<const Image*> lights;
+    for (std::size_t j = 0; j < faces.size(); ++j)
+      if (j != i) {
+        others.push_back(alone[j].traces[0].get());
+        lights.push_back(&alone[j].light[0]);
+      }
+    detail::FrameTrace t = *alone[i].traces[0];
+    detail::ViewsReport report;
+    detail::ViewHits found;
+    detail::continue_in_views(&t, others, lights, s, false, &report, &found);
+    const Image again = detail::view_light(t, found, others, lights, s);
+    double first = 0, later = 0;
+    for (int k = 0; k < 3; ++k)
+      for (std::size_t p = 0; p < again.plane_size(); ++p) {
+        first += t.hits.foreign.plane(k)[p];
+        later += again.plane(k)[p];
+      }
+    std::printf("face %zu: %s; light %.4f, again %.4f\n", i, report.describe(1).c_str(), first,
+                later);
+    EXPECT_NEAR(later, first, 1e-4 * std::max(first, 1.0)) << "face " << i;
+    hidden += report.hidden;
+  }
+  EXPECT_GT(hidden, 0u);
 }
 
 // A ray that meets nothing any view shows, last seen rising in front of the sky, reaches it

@@ -323,13 +323,15 @@ bool shows_sky(const std::vector<Neighbour>& views, const Imath::V3f& d) {
 }
 
 // Where a ray that meets no surface any view shows was last seen, and in front of what: of
-// kLastSeenSamples points along it, spread evenly in the angle under which the frame's camera
-// sees them (parameter |o| s / (1 - s) for s evenly in (0, 1)), the last one that the first view
-// holding it shows in front of the sky, or in front of a surface facing the ray. The ray passed
-// behind something after it, and nothing any view shows stopped it: what it meets lies hidden
-// behind that, and is taken to be what lay behind the ray where it was last seen, continued:
-// that surface, which the ray was heading for, or the sky. A surface that does not face the ray
-// (its own, a floor it rises from) tells nothing of what the ray meets.
+// kLastSeenSamples points along it, at parameters |o| s / (1 - s) for s evenly spaced in (0, 1)
+// (denser near its origin, out to 127 times the origin's distance from the camera, and no
+// further than `max_distance` when that is set), the last one that the first view holding it
+// shows in front of the sky, or in front of a surface facing the ray; provided that the ray
+// passed behind what a view shows after it (views that do not cover every direction can lose it
+// instead). What the ray meets lies hidden behind that, and is taken to be what lay behind it
+// where it was last seen, continued: that surface, which the ray was heading for, or the sky. A
+// surface that does not face the ray (its own, a floor it rises from) tells nothing of what the
+// ray meets.
 constexpr int kLastSeenSamples = 64;
 
 struct LastSeen {
@@ -337,12 +339,16 @@ struct LastSeen {
   std::int32_t sample = -1;         // the surface's trace sample, or -1 for the sky
 };
 
-LastSeen last_seen(const std::vector<Neighbour>& views, const Imath::V3f& o, const Imath::V3f& d) {
+LastSeen last_seen(const std::vector<Neighbour>& views, const Imath::V3f& o, const Imath::V3f& d,
+                   float max_distance) {
   LastSeen seen;
+  bool hidden_since = false;
   const float scale = o.length();
   for (int k = 0; k < kLastSeenSamples; ++k) {
     const float s = (static_cast<float>(k) + 0.5f) / kLastSeenSamples;
-    const Imath::V3f p = o + (scale * s / (1.0f - s)) * d;
+    const float t = scale * s / (1.0f - s);
+    if (max_distance > 0 && t > max_distance) break;
+    const Imath::V3f p = o + t * d;
     for (const Neighbour& n : views) {
       const Imath::V3f q = n.from_center.point(p);
       if (!(q.z > 0)) continue;
@@ -354,17 +360,22 @@ LastSeen last_seen(const std::vector<Neighbour>& views, const Imath::V3f& o, con
       const std::size_t i = static_cast<std::size_t>(sy) * g.width + static_cast<std::size_t>(sx);
       if (g.origin[i] < 0) {
         seen = {&n, -1};
+        hidden_since = false;
       } else if (q.z < g.depth.plane(0)[i]) {
         const Imath::V3f dn = n.from_center.direction(d);
         if (dn.x * g.normal.plane(0)[i] + dn.y * g.normal.plane(1)[i] +
                 dn.z * g.normal.plane(2)[i] <
-            0)
+            0) {
           seen = {&n, static_cast<std::int32_t>(i)};
+          hidden_since = false;
+        }
+      } else {
+        hidden_since = true;
       }
       break;
     }
   }
-  return seen;
+  return hidden_since ? seen : LastSeen();
 }
 
 // Whether the centre frame sees past camera-space point `x` (its own space): x projects onto its
@@ -565,7 +576,8 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
           // surface it was heading for, or the sky if it rises (falling, it meets the ground or
           // something on it, which the miss model stands for).
           if (!best && !was_refused && !std::isinf(t_from)) {
-            const LastSeen seen = last_seen(neighbours, o, ray.direction);
+            const LastSeen seen =
+                last_seen(neighbours, o, ray.direction, static_cast<float>(settings.max_distance));
             if (seen.view && seen.sample < 0 && ray.direction.dot(self.misses.up()) > 0) {
               found_here->take_shares(self.misses, ray);
               self.misses.add_sky(ray.direction, ray.weight, found_here->sky);
@@ -575,6 +587,10 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
             if (seen.view && seen.sample >= 0) {
               add_hit_light(*seen.view->view->trace, seen.view->view->light, seen.sample,
                             ray.weight, found_here->light);
+              if (found_rays) {
+                found_by_row[by].push_back({seen.view->index, seen.sample, ray.weight});
+                ++found_count[s];
+              }
               found_here->take_shares(self.misses, ray);
               ++row_hidden;
               return;

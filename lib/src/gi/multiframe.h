@@ -117,8 +117,11 @@ struct ViewsReport {
 // view's few pixels see much of the scene so. A ray that meets nothing any view shows, where
 // the first view whose picture holds its vanishing point shows no surface there, reaches the
 // sky: it takes the environment's light (into env) and its shares of the miss model are taken
-// out as a found ray's are. True when a ray met a surface or reached the sky; nothing changes
-// without a world transform for the frame's camera. With `found`, also which view sample each found
+// out as a found ray's are. One that meets nothing else takes what lay behind it where it was
+// last seen (multiframe.cpp, last_seen): a surface facing it (its light, as a found ray's), or
+// the sky if the ray rises; the rest are left to the miss model. True when a ray met a surface,
+// reached the sky or took a surface so; nothing changes without a world transform for the
+// frame's camera. With `found`, also which view sample each found
 // ray met and its weight, for view_light.
 struct ViewHit {
   std::uint32_t view;  // its index in `views`
