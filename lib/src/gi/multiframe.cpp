@@ -304,20 +304,26 @@ std::int32_t march_in(const View& n, const Imath::V3f& o, const Imath::V3f& d, f
   return mark_side(hit, in_front < -kBehindTolerance * p.z);
 }
 
+// The trace sample of grid `g` under camera-space point (or direction) `q` of its camera: -1 when
+// q is not in front of the camera or projects outside the grid.
+std::int64_t sample_under(const TraceGrid& g, const Imath::V3f& q) {
+  if (!(q.z > 0)) return -1;
+  const float sx = g.cx + g.fx * q.x / q.z, sy = g.cy - g.fy * q.y / q.z;
+  if (!(sx >= 0 && sy >= 0 && sx < static_cast<float>(g.width) &&
+        sy < static_cast<float>(g.height)))
+    return -1;
+  return static_cast<std::int64_t>(sy) * g.width + static_cast<std::int64_t>(sx);
+}
+
 // Whether the views show the sky in camera-space direction `d` (the centre's space): the first
 // view (in their order) whose picture holds d's vanishing point shows no surface at the trace
 // sample there. What a ray along d meets, if it meets nothing that any view shows, lies beyond
 // every surface the views show in its direction: there is none there.
 bool shows_sky(const std::vector<Neighbour>& views, const Imath::V3f& d) {
   for (const Neighbour& n : views) {
-    const Imath::V3f dn = n.from_center.direction(d);
-    if (!(dn.z > 0)) continue;
     const TraceGrid& g = n.view->trace->grid;
-    const float sx = g.cx + g.fx * dn.x / dn.z, sy = g.cy - g.fy * dn.y / dn.z;
-    if (!(sx >= 0 && sy >= 0 && sx < static_cast<float>(g.width) &&
-          sy < static_cast<float>(g.height)))
-      continue;
-    return g.origin[static_cast<std::size_t>(sy) * g.width + static_cast<std::size_t>(sx)] < 0;
+    const std::int64_t i = sample_under(g, n.from_center.direction(d));
+    if (i >= 0) return g.origin[i] < 0;
   }
   return false;
 }
@@ -350,14 +356,10 @@ LastSeen last_seen(const std::vector<Neighbour>& views, const Imath::V3f& o, con
     if (max_distance > 0 && t > max_distance) break;
     const Imath::V3f p = o + t * d;
     for (const Neighbour& n : views) {
-      const Imath::V3f q = n.from_center.point(p);
-      if (!(q.z > 0)) continue;
       const TraceGrid& g = n.view->trace->grid;
-      const float sx = g.cx + g.fx * q.x / q.z, sy = g.cy - g.fy * q.y / q.z;
-      if (!(sx >= 0 && sy >= 0 && sx < static_cast<float>(g.width) &&
-            sy < static_cast<float>(g.height)))
-        continue;
-      const std::size_t i = static_cast<std::size_t>(sy) * g.width + static_cast<std::size_t>(sx);
+      const Imath::V3f q = n.from_center.point(p);
+      const std::int64_t i = sample_under(g, q);
+      if (i < 0) continue;
       if (g.origin[i] < 0) {
         seen = {&n, -1};
         hidden_since = false;
