@@ -566,54 +566,48 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
               best_along = along;
             }
           }
-          // Met nothing any view shows, where a view shows the sky: it reaches the sky.
-          if (!best && !was_refused && !std::isinf(t_from) &&
-              shows_sky(neighbours, ray.direction)) {
+          // A view's trace sample `hit` found for the ray: its light (kept with `found_rays`,
+          // for the views' later passes among themselves), its shares out of the miss model.
+          auto take = [&](const Neighbour& n, std::int32_t hit) {
+            add_hit_light(*n.view->trace, n.view->light, hit, ray.weight, found_here->light);
+            if (found_rays) {
+              found_by_row[by].push_back({n.index, hit, ray.weight});
+              ++found_count[s];
+            }
             found_here->take_shares(self.misses, ray);
-            self.misses.add_sky(ray.direction, ray.weight, found_here->sky);
-            ++row_sky;
+          };
+          if (best) {
+            take(*best, best_hit);
+            ++row_found;
             return;
           }
-          // Met nothing any view shows: it takes what lay behind it where it was last seen, a
-          // surface it was heading for, or the sky if it rises (falling, it meets the ground or
-          // something on it, which the miss model stands for).
-          if (!best && !was_refused && !std::isinf(t_from)) {
-            const LastSeen seen =
-                last_seen(neighbours, o, ray.direction, static_cast<float>(settings.max_distance));
-            if (seen.view && seen.sample < 0 && ray.direction.dot(self.misses.up()) > 0) {
+          // Met nothing any view shows. Where a view shows the sky in its direction it reaches
+          // the sky; else it takes what lay behind it where it was last seen: a surface it was
+          // heading for, or the sky if it rises (falling, it meets the ground or something on
+          // it, which the miss model stands for).
+          if (!was_refused && !std::isinf(t_from)) {
+            const bool sky_ahead = shows_sky(neighbours, ray.direction);
+            const LastSeen seen = sky_ahead ? LastSeen()
+                                            : last_seen(neighbours, o, ray.direction,
+                                                        static_cast<float>(settings.max_distance));
+            if (sky_ahead ||
+                (seen.view && seen.sample < 0 && ray.direction.dot(self.misses.up()) > 0)) {
               found_here->take_shares(self.misses, ray);
               self.misses.add_sky(ray.direction, ray.weight, found_here->sky);
               ++row_sky;
               return;
             }
             if (seen.view && seen.sample >= 0) {
-              add_hit_light(*seen.view->view->trace, seen.view->view->light, seen.sample,
-                            ray.weight, found_here->light);
-              if (found_rays) {
-                found_by_row[by].push_back({seen.view->index, seen.sample, ray.weight});
-                ++found_count[s];
-              }
-              found_here->take_shares(self.misses, ray);
+              take(*seen.view, seen.sample);
               ++row_hidden;
               return;
             }
           }
-          if (!best) {
-            if (was_refused) ++row_refused;
-            if (keep_missed) {
-              row_left[by].push_back(ray);
-              ++left_count[s];
-            }
-            return;
+          if (was_refused) ++row_refused;
+          if (keep_missed) {
+            row_left[by].push_back(ray);
+            ++left_count[s];
           }
-          add_hit_light(*best->view->trace, best->view->light, best_hit, ray.weight,
-                        found_here->light);
-          if (found_rays) {
-            found_by_row[by].push_back({best->index, best_hit, ray.weight});
-            ++found_count[s];
-          }
-          found_here->take_shares(self.misses, ray);
-          ++row_found;
         });
     rays += row_rays;
     found += row_found;
