@@ -347,7 +347,7 @@ TEST(Views, RaysHiddenBehindWhatTheViewsShowTakeTheSurfaceTheyWereHeadingFor) {
       return static_cast<double>(ledge_from(o, d).reflected);
     });
   });
-  // The share that meets the back wall where the camera sees it, and where the ledge hides it.
+  // The share of its rays that meet the back wall where the ledge hides it from the camera.
   const double hidden =
       hemisphere_light({0, 0, kFront}, {0, 0, -1}, [](const Imath::V3d& o, const Imath::V3d& d) {
         const WallHit w = ledge_from(o, d);
