@@ -184,15 +184,19 @@ float leaves_view(const TraceGrid& g, const Imath::V3f& o, const Imath::V3f& d, 
 // The view of trace grid `g` (its pyramid of sight) as half-spaces of another camera's space,
 // `to_view` carrying that space into the view's: side k holds the points p with side[k] . p +
 // offset[k] >= 0; side 4, the near plane, also needs kNearFraction x the ray's scale taken off.
+// With a `margin`, the four sides stand that many pixels out of the picture.
 struct Frustum {
   Imath::V3f side[5];
   float offset[5];
 
-  Frustum(const TraceGrid& g, const Rigid& to_view) {
+  Frustum(const TraceGrid& g, const Rigid& to_view, float margin = 0) {
     const float w = static_cast<float>(g.width), h = static_cast<float>(g.height);
-    // In the view's space (sx >= 0, sx <= width, sy >= 0, sy <= height, z >= 0).
-    const Imath::V3f in_view[5] = {
-        {g.fx, 0, g.cx}, {-g.fx, 0, w - g.cx}, {0, -g.fy, g.cy}, {0, g.fy, h - g.cy}, {0, 0, 1}};
+    // In the view's space (sx >= -margin, sx <= width + margin, sy likewise, z >= 0).
+    const Imath::V3f in_view[5] = {{g.fx, 0, g.cx + margin},
+                                   {-g.fx, 0, w - g.cx + margin},
+                                   {0, -g.fy, g.cy + margin},
+                                   {0, g.fy, h - g.cy + margin},
+                                   {0, 0, 1}};
     // a . (p R + t) = (R a) . p + a . t (row vectors).
     for (int k = 0; k < 5; ++k) {
       const Imath::V3f& a = in_view[k];
@@ -228,6 +232,25 @@ struct Frustum {
         return std::numeric_limits<float>::infinity();
     }
     return lo < hi ? lo : std::numeric_limits<float>::infinity();
+  }
+
+  // The parameters [*lo, *hi] of ray (o, d) inside the four sides (which hold only points in
+  // front of the camera: two opposite sides' sum is the width times z); false when it passes
+  // beside them.
+  bool inside_sides(const Imath::V3f& o, const Imath::V3f& d, float* lo, float* hi) const {
+    float a = -std::numeric_limits<float>::infinity(), b = std::numeric_limits<float>::infinity();
+    for (int k = 0; k < 4; ++k) {
+      const float at = side[k].dot(o) + offset[k], slope = side[k].dot(d);
+      if (slope > 0)
+        a = std::max(a, -at / slope);
+      else if (slope < 0)
+        b = std::min(b, at / -slope);
+      else if (!(at >= 0))
+        return false;
+    }
+    *lo = a;
+    *hi = b;
+    return a <= b;
   }
 };
 
@@ -345,39 +368,56 @@ struct LastSeen {
   std::int32_t sample = -1;         // the surface's trace sample, or -1 for the sky
 };
 
-LastSeen last_seen(const std::vector<Neighbour>& views, const Imath::V3f& o, const Imath::V3f& d,
-                   float max_distance) {
-  LastSeen seen;
-  bool hidden_since = false;
+// A point a view's grid holds lies this many pixels inside the view's sides at least, as they are
+// computed (last_seen): the float error of either, at the views' sizes, is far below a pixel.
+constexpr float kReachMargin = 1.0f;
+
+// `reach`: each view's sides, kReachMargin out (Frustum), to pass over the views that cannot
+// hold a point; `spans`, room for where the ray is inside them. Walks the points from the
+// farthest back: the first in front of the sky or of a surface facing the ray is the last seen,
+// and a point behind what a view shows found before it tells that the ray was hidden after.
+LastSeen last_seen(const std::vector<Neighbour>& views, const std::vector<Frustum>& reach,
+                   const Imath::V3f& o, const Imath::V3f& d, float max_distance,
+                   std::vector<std::array<float, 2>>* spans) {
+  const std::size_t count = views.size();
+  spans->resize(count);
+  bool any = false;
+  for (std::size_t v = 0; v < count; ++v) {
+    std::array<float, 2>& span = (*spans)[v];
+    if (!reach[v].inside_sides(o, d, &span[0], &span[1]))
+      span = {std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity()};
+    else
+      any = true;
+  }
+  if (!any) return LastSeen();
+  bool hidden_after = false;
   const float scale = o.length();
-  for (int k = 0; k < kLastSeenSamples; ++k) {
+  for (int k = kLastSeenSamples - 1; k >= 0; --k) {
     const float s = (static_cast<float>(k) + 0.5f) / kLastSeenSamples;
     const float t = scale * s / (1.0f - s);
-    if (max_distance > 0 && t > max_distance) break;
+    if (max_distance > 0 && t > max_distance) continue;
     const Imath::V3f p = o + t * d;
-    for (const Neighbour& n : views) {
+    for (std::size_t v = 0; v < count; ++v) {
+      if (!(t >= (*spans)[v][0] && t <= (*spans)[v][1])) continue;
+      const Neighbour& n = views[v];
       const TraceGrid& g = n.view->trace->grid;
       const Imath::V3f q = n.from_center.point(p);
       const std::int64_t i = sample_under(g, q);
       if (i < 0) continue;
-      if (g.origin[i] < 0) {
-        seen = {&n, -1};
-        hidden_since = false;
-      } else if (q.z < g.depth.plane(0)[i]) {
+      if (g.origin[i] < 0) return hidden_after ? LastSeen{&n, -1} : LastSeen();
+      if (q.z < g.depth.plane(0)[i]) {
         const Imath::V3f dn = n.from_center.direction(d);
         if (dn.x * g.normal.plane(0)[i] + dn.y * g.normal.plane(1)[i] +
                 dn.z * g.normal.plane(2)[i] <
-            0) {
-          seen = {&n, static_cast<std::int32_t>(i)};
-          hidden_since = false;
-        }
+            0)
+          return hidden_after ? LastSeen{&n, static_cast<std::int32_t>(i)} : LastSeen();
       } else {
-        hidden_since = true;
+        hidden_after = true;
       }
       break;
     }
   }
-  return hidden_since ? seen : LastSeen();
+  return LastSeen();
 }
 
 // Whether the centre frame sees past camera-space point `x` (its own space): x projects onto its
@@ -487,8 +527,11 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
   r.views = static_cast<int>(neighbours.size());
   if (neighbours.empty() || self.missed.rays.empty()) return false;
   const View& own = all.front();
-  std::vector<Frustum> frusta;
-  for (const Neighbour& n : neighbours) frusta.emplace_back(n.view->trace->grid, n.from_center);
+  std::vector<Frustum> frusta, reach;
+  for (const Neighbour& n : neighbours) {
+    frusta.emplace_back(n.view->trace->grid, n.from_center);
+    reach.emplace_back(n.view->trace->grid, n.from_center, kReachMargin);
+  }
   const std::size_t count = neighbours.size();
   const TraceGrid& grid = self.grid;
   WeightedHits& hits = self.hits;
@@ -513,6 +556,7 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
     std::size_t sample = ~std::size_t{0};
     std::vector<Imath::V3f> origin_in(count);
     std::vector<std::array<float, 5>> sides_at(count);
+    std::vector<std::array<float, 2>> spans;
     const float t_end =
         settings.max_distance > 0 ? static_cast<float>(settings.max_distance) : kFarFactor;
     walk_missed_rays(
@@ -587,9 +631,10 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
           // it, which the miss model stands for).
           if (!was_refused && !std::isinf(t_from)) {
             const bool sky_ahead = shows_sky(neighbours, ray.direction);
-            const LastSeen seen = sky_ahead ? LastSeen()
-                                            : last_seen(neighbours, o, ray.direction,
-                                                        static_cast<float>(settings.max_distance));
+            const LastSeen seen =
+                sky_ahead ? LastSeen()
+                          : last_seen(neighbours, reach, o, ray.direction,
+                                      static_cast<float>(settings.max_distance), &spans);
             if (sky_ahead ||
                 (seen.view && seen.sample < 0 && ray.direction.dot(self.misses.up()) > 0)) {
               found_here->take_shares(self.misses, ray);
