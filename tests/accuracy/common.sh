@@ -25,15 +25,17 @@ training_scenes() {
   fi
 }
 
-# truth_means DIR SCENE: truth_error's seven columns, each averaged over the frames
-# DIR/SCENE.*.exr, against ssgi's output $out/o.<frame>.exr.
+# truth_means DIR SCENE [SECOND]: truth_error's seven columns, each averaged over the frames
+# DIR/SCENE.*.exr, against ssgi's output $out/o.<frame>.exr; with SECOND (a cache of the same
+# frames rendered with another seed), truth_error --second's eight, the truth's noise taken out.
 truth_means() {
-  local f n
+  local f n second=()
   for f in "$1/$2".*.exr; do
     n=${f%.exr}
-    "$truth" "$f" "$out/o.${n##*.}.exr"
-  done | awk '{ for (c = 1; c <= 7; ++c) s[c] += $c; n++ }
-    END { for (c = 1; c <= 7; ++c) printf "%.3f%s", s[c] / n, c < 7 ? " " : "\n" }'
+    if [ -n "${3:-}" ]; then second=(--second "$3/$2/${f##*/}"); fi
+    "$truth" "${second[@]}" "$f" "$out/o.${n##*.}.exr"
+  done | awk '{ for (c = 1; c <= NF; ++c) s[c] += $c; n++; k = NF }
+    END { for (c = 1; c <= k; ++c) printf "%.3f%s", s[c] / n, c < k ? " " : "\n" }'
 }
 
 # save_scene_blend SCENE DIR FRAMES RESOLUTION: training scene SCENE built by scenes.py as the

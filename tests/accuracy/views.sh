@@ -8,11 +8,15 @@
 # as training.sh) for the oracle ambient, ssgi without views, with the six faces and with the
 # lat-long, each with its level (the mean of its indirect over the truth's), and the means.
 # The sample data's scenes (room, stage) have no .blend to render views from and are not in it.
+# With SSGI_TRUTH_SECOND (a cache folder), every shot is rendered there again with seed 1
+# (render.sh, SSGI_TRAINING_SEED), and each error is measured against the two renders' mean with
+# the truth's own noise taken out (truth_error --second): an estimate of the error against the
+# noise-free light; a last column gives one render's noise (its relative RMSE).
 # Not run by ctest: it renders with Blender.
 # Usage: tests/accuracy/views.sh [BUILD_DIR] [-- extra ssgi options]
 # Environment: SSGI_TRAINING_SCENES (space-separated; default every training scene), render.sh's
 # SSGI_TRAINING_CACHE, SSGI_TRAINING_SAMPLES, SSGI_TRAINING_RESOLUTION, SSGI_TRAINING_FRAMES;
-# SSGI_VIEWS_SAMPLES, BLENDER.
+# SSGI_VIEWS_SAMPLES, SSGI_TRUTH_SECOND, BLENDER.
 set -euo pipefail
 source "$(dirname "$0")/common.sh"
 blender=${BLENDER:-blender}
@@ -21,6 +25,11 @@ cache=$(tests/accuracy/training/render.sh "${scenes[@]}" | tail -n 1)
 samples=${SSGI_VIEWS_SAMPLES:-64}
 frames=${SSGI_TRAINING_FRAMES:-8}
 resolution=${SSGI_TRAINING_RESOLUTION:-320x180}
+second=${SSGI_TRUTH_SECOND:-}
+if [ -n "$second" ]; then
+  SSGI_TRAINING_CACHE=$second SSGI_TRAINING_SEED=1 tests/accuracy/training/render.sh \
+    "${scenes[@]}" > /dev/null
+fi
 
 # render_views SCENE: its views in $cache/SCENE.views, once (a "done" file marks them whole).
 render_views() {
@@ -35,8 +44,13 @@ render_views() {
   touch "$views/done"
 }
 
-printf '| scene | oracle ambient | ssgi | level | six faces | level | lat-long | level |\n'
-printf '|---|---|---|---|---|---|---|---|\n'
+if [ -n "$second" ]; then
+  printf '| scene | oracle ambient | ssgi | level | six faces | level | lat-long | level | truth noise |\n'
+  printf '|---|---|---|---|---|---|---|---|---|\n'
+else
+  printf '| scene | oracle ambient | ssgi | level | six faces | level | lat-long | level |\n'
+  printf '|---|---|---|---|---|---|---|---|\n'
+fi
 rows=()
 for scene in "${scenes[@]}"; do
   render_views "$scene"
@@ -53,12 +67,15 @@ for scene in "${scenes[@]}"; do
     rm -f "$out"/o.*.exr
     "$ssgi" run "$cache/$scene/$scene.####.exr" -o "$out/o.####.exr" -q --no-passthrough \
       "${with[@]}" "${extra[@]}"
-    read -r _ ind _ _ oracle level _ <<< "$(truth_means "$cache/$scene" "$scene")"
+    read -r _ ind _ _ oracle level _ noise <<< "$(truth_means "$cache/$scene" "$scene" "$second")"
     cells+=("$ind" "$level")
   done
-  printf '| %s | %s | %s | %s | %s | %s | %s | %s |\n' "$scene" "$oracle" "${cells[@]}"
+  if [ -n "$second" ]; then cells+=("$noise"); fi
+  line=$(printf '| %s ' "$scene" "$oracle" "${cells[@]}")
+  printf '%s|\n' "$line"
   rows+=("$oracle ${cells[*]}")
 done
-printf '%s\n' "${rows[@]}" | awk '{ for (c = 1; c <= 7; ++c) s[c] += $c; n++ }
-  END { printf "| **mean**, %d scenes | %.3f | %.3f | %.2f | %.3f | %.2f | %.3f | %.2f |\n",
-    n, s[1] / n, s[2] / n, s[3] / n, s[4] / n, s[5] / n, s[6] / n, s[7] / n }'
+printf '%s\n' "${rows[@]}" | awk '{ for (c = 1; c <= NF; ++c) s[c] += $c; n++; k = NF }
+  END { printf "| **mean**, %d scenes | %.3f |", n, s[1] / n
+    for (c = 2; c <= k; ++c) printf(c % 2 ? " %.2f |" : " %.3f |", s[c] / n)
+    printf "\n" }'

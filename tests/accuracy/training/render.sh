@@ -7,12 +7,14 @@
 # camera.json the script writes (oiiotool keeps channels, float type and ZIP compression).
 # Prints the cache folder on the last line of stdout. A second run on the same cache waits for
 # the first (flock).
-# A scene already in the cache at another resolution or frame count is an error, not replaced:
-# give such renders their own SSGI_TRAINING_CACHE (tests/bench/rendered.sh does).
+# A scene already in the cache at another resolution, frame count or seed is an error, not
+# replaced: give such renders their own SSGI_TRAINING_CACHE (tests/bench/rendered.sh does).
 # Usage: tests/accuracy/training/render.sh [SCENE...]   (default: every scene of scenes.py)
 # Environment: SSGI_TRAINING_CACHE (default ~/.cache/ssgi/training), SSGI_TRAINING_SAMPLES
 # (default 256), SSGI_TRAINING_RESOLUTION (WxH, default 320x180), SSGI_TRAINING_FRAMES
-# (default 8), BLENDER (default blender). Needs blender 3.4, oiiotool, python3.
+# (default 8), SSGI_TRAINING_SEED (Cycles' sampling seed, default 0: another seed renders the same
+# frames with independent noise, into its own cache), BLENDER (default blender). Needs
+# blender 3.4, oiiotool, python3.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 cache=${SSGI_TRAINING_CACHE:-$HOME/.cache/ssgi/training}
@@ -20,21 +22,24 @@ samples=${SSGI_TRAINING_SAMPLES:-256}
 blender=${BLENDER:-blender}
 resolution=${SSGI_TRAINING_RESOLUTION:-320x180}
 frames=${SSGI_TRAINING_FRAMES:-8}
+seed=${SSGI_TRAINING_SEED:-0}
 blender_run() {
   "$blender" -b --factory-startup --python-exit-code 1 -P "$here/scenes.py" -- "$@"
 }
 
-# rendered_as DIR: the resolution and frame count DIR/camera.json says, as "WxH N".
+# rendered_as DIR: the resolution, frame count and seed DIR/camera.json says, as "WxH N seed S"
+# (seed 0 where it names none).
 rendered_as() {
   python3 -c 'import json, sys; c = json.load(open(sys.argv[1]))
-print("%dx%d %d" % (c["width"], c["height"], len(c["frames"])))' "$1/camera.json"
+print("%dx%d %d seed %d" % (c["width"], c["height"], len(c["frames"]), c.get("seed", 0)))' \
+    "$1/camera.json"
 }
 
 # complete DIR NAME: every frame present, readable to the last pixel, with its camera.
 complete() {
   local dir=$1 name=$2 f
   [ -f "$dir/camera.json" ] || return 1
-  [ "$(rendered_as "$dir")" = "$resolution $frames" ] || return 1
+  [ "$(rendered_as "$dir")" = "$resolution $frames seed $seed" ] || return 1
   for f in $(seq -f "$dir/$name.%04g.exr" 1 "$frames"); do
     [ -f "$f" ] || return 1
     iinfo --stats "$f" > /dev/null 2>&1 || return 1
@@ -75,8 +80,8 @@ for name in "${scenes[@]}"; do
   fi
   if [ -f "$cache/$name/camera.json" ]; then
     held=$(rendered_as "$cache/$name")
-    [ "$held" = "$resolution $frames" ] || {
-      echo "render.sh: $cache/$name holds $held frames, not $resolution $frames:" \
+    [ "$held" = "$resolution $frames seed $seed" ] || {
+      echo "render.sh: $cache/$name holds $held frames, not $resolution $frames seed $seed:" \
         "set SSGI_TRAINING_CACHE to another folder" >&2
       exit 1
     }
@@ -86,7 +91,7 @@ for name in "${scenes[@]}"; do
     "(log: $tmp/blender.log)" >&2
   start=$(date +%s)
   blender_run --scene "$name" --out "$tmp" --samples "$samples" --frames "$frames" \
-    --resolution "$resolution" > "$tmp/blender.log" 2>&1 || {
+    --resolution "$resolution" --seed "$seed" > "$tmp/blender.log" 2>&1 || {
     echo "render.sh: $name failed, see $tmp/blender.log" >&2
     exit 1
   }
@@ -94,7 +99,7 @@ for name in "${scenes[@]}"; do
   complete "$tmp" "$name" || { echo "render.sh: $name: incomplete output in $tmp" >&2; exit 1; }
   # The samples as rendered (scenes.py raises them for scenes whose truth needs more).
   spp=$(python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["spp"])' "$tmp/camera.json")
-  echo "$spp samples, $resolution, $(( ($(date +%s) - start) / frames )) s/frame" \
+  echo "$spp samples, seed $seed, $resolution, $(( ($(date +%s) - start) / frames )) s/frame" \
     > "$tmp/render.txt"
   echo "$name: $(cat "$tmp/render.txt")" >&2
   rm -f "$tmp/blender.log"

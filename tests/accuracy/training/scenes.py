@@ -2,15 +2,16 @@
 
 Usage (Blender 3.4, headless):
   blender -b --factory-startup --python-exit-code 1 -P tests/accuracy/training/scenes.py -- \
-      --scene NAME --out DIR [--samples N] [--frames N] [--resolution WxH] [--list] [--no-render]
-      [--panorama FRAME [--panorama-at camera|surfaces]] [--save FILE.blend]
+      --scene NAME --out DIR [--samples N] [--frames N] [--resolution WxH] [--seed N] [--list]
+      [--no-render] [--panorama FRAME [--panorama-at camera|surfaces]] [--save FILE.blend]
 
 Builds scene NAME from primitives only (no assets), renders frames 1..N (default 8) into
 DIR/NAME.####.exr (Cycles CPU, N samples per pixel, default 256, times the scene's
 SAMPLES_FACTOR; no adaptive sampling, no denoising, WxH pixels, default 320x180, multilayer
 32-bit float ZIP EXR, view layer "ViewLayer" with the passes of ../shared/data; the camera moves
-between its first and its last key over frames 1..N) and writes DIR/camera.json in the
-sample's format, including each frame's OpenEXR worldToCamera and worldToNDC
+between its first and its last key over frames 1..N; Cycles' sampling --seed, default 0 as
+Blender's: another seed renders the same frames with independent noise) and writes
+DIR/camera.json in the sample's format, including each frame's OpenEXR worldToCamera and worldToNDC
 (camera_matrices.py). Stock Blender does not put those in the headers: render.sh adds them
 afterwards. --list prints the scene names and what each one exercises
 (SCENE<TAB>name<TAB>description; Blender prints other lines too), --no-render writes
@@ -608,7 +609,8 @@ def render_settings(scene, samples, frames, width, height):
 def camera_json(scene, name, samples, frames, world):
     cam = scene.camera
     width, height = scene.render.resolution_x, scene.render.resolution_y
-    out = {"scene": name, "width": width, "height": height, "spp": samples}
+    out = {"scene": name, "width": width, "height": height, "spp": samples,
+           "seed": scene.cycles.seed}
     out.update(world)
     out["frames"] = []
     for f in range(1, frames + 1):
@@ -688,14 +690,15 @@ def render_panorama(scene, name, frame, out_dir, at):
 
 def main():
     argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
-    opts = {"--samples": "256", "--frames": "8", "--resolution": f"{WIDTH}x{HEIGHT}"}
+    opts = {"--samples": "256", "--frames": "8", "--resolution": f"{WIDTH}x{HEIGHT}",
+            "--seed": "0"}
     flags = set()
     i = 0
     while i < len(argv):
         if argv[i] in ("--list", "--no-render"):
             flags.add(argv[i])
             i += 1
-        elif (argv[i] in ("--scene", "--out", "--samples", "--frames", "--resolution",
+        elif (argv[i] in ("--scene", "--out", "--samples", "--frames", "--resolution", "--seed",
                           "--panorama", "--panorama-at", "--save") and i + 1 < len(argv)):
             opts[argv[i]] = argv[i + 1]
             i += 2
@@ -718,6 +721,7 @@ def main():
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
     render_settings(scene, samples, frames, width, height)
+    scene.cycles.seed = int(opts["--seed"])
     world = SCENES[name][0](frames)
     os.makedirs(out_dir, exist_ok=True)
     if opts.get("--panorama-at", "camera") not in ("camera", "surfaces"):
