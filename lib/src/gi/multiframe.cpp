@@ -368,8 +368,9 @@ struct LastSeen {
   std::int32_t sample = -1;         // the surface's trace sample, or -1 for the sky
 };
 
-// A point a view's grid holds lies this many pixels inside the view's sides at least, as they are
-// computed (last_seen): the float error of either, at the views' sizes, is far below a pixel.
+// How many pixels out last_seen sets a view's sides to pass over the views that cannot hold a
+// point: a point that a grid holds is inside its sides, and the float error of either test, at
+// the views' sizes, is far below a pixel, so no view that holds one is passed over.
 constexpr float kReachMargin = 1.0f;
 
 // `reach`: each view's sides, kReachMargin out (Frustum), to pass over the views that cannot
