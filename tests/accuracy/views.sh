@@ -44,13 +44,10 @@ render_views() {
   touch "$views/done"
 }
 
-if [ -n "$second" ]; then
-  printf '| scene | oracle ambient | ssgi | level | six faces | level | lat-long | level | truth noise |\n'
-  printf '|---|---|---|---|---|---|---|---|---|\n'
-else
-  printf '| scene | oracle ambient | ssgi | level | six faces | level | lat-long | level |\n'
-  printf '|---|---|---|---|---|---|---|---|\n'
-fi
+head='| scene | oracle ambient | ssgi | level | six faces | level | lat-long | level |'
+rule='|---|---|---|---|---|---|---|---|'
+if [ -n "$second" ]; then head+=' truth noise |' rule+='---|'; fi
+printf '%s\n%s\n' "$head" "$rule"
 rows=()
 for scene in "${scenes[@]}"; do
   render_views "$scene"

@@ -222,15 +222,7 @@ struct Frustum {
   float enters(const std::array<float, 5>& at, const Imath::V3f& d, float t_from,
                float t_end) const {
     float lo = t_from, hi = t_end;
-    for (int k = 0; k < 5; ++k) {
-      const float slope = side[k].dot(d);
-      if (slope > 0)
-        lo = std::max(lo, -at[k] / slope);
-      else if (slope < 0)
-        hi = std::min(hi, at[k] / -slope);
-      else if (at[k] < 0)
-        return std::numeric_limits<float>::infinity();
-    }
+    if (!narrow(at.data(), d, 5, &lo, &hi)) return std::numeric_limits<float>::infinity();
     return lo < hi ? lo : std::numeric_limits<float>::infinity();
   }
 
@@ -238,19 +230,27 @@ struct Frustum {
   // front of the camera: two opposite sides' sum is the width times z); false when it passes
   // beside them.
   bool inside_sides(const Imath::V3f& o, const Imath::V3f& d, float* lo, float* hi) const {
-    float a = -std::numeric_limits<float>::infinity(), b = std::numeric_limits<float>::infinity();
-    for (int k = 0; k < 4; ++k) {
-      const float at = side[k].dot(o) + offset[k], slope = side[k].dot(d);
+    float at[4];
+    for (int k = 0; k < 4; ++k) at[k] = side[k].dot(o) + offset[k];
+    *lo = -std::numeric_limits<float>::infinity();
+    *hi = std::numeric_limits<float>::infinity();
+    return narrow(at, d, 4, lo, hi) && *lo <= *hi;
+  }
+
+ private:
+  // Narrows [*lo, *hi] to the parameters where ray (o, d), with its origin's values `at` of the
+  // first `sides` sides, is inside them: false when a side it runs along has it outside.
+  bool narrow(const float* at, const Imath::V3f& d, int sides, float* lo, float* hi) const {
+    for (int k = 0; k < sides; ++k) {
+      const float slope = side[k].dot(d);
       if (slope > 0)
-        a = std::max(a, -at / slope);
+        *lo = std::max(*lo, -at[k] / slope);
       else if (slope < 0)
-        b = std::min(b, at / -slope);
-      else if (!(at >= 0))
+        *hi = std::min(*hi, at[k] / -slope);
+      else if (at[k] < 0)
         return false;
     }
-    *lo = a;
-    *hi = b;
-    return a <= b;
+    return true;
   }
 };
 
