@@ -693,7 +693,7 @@ TEST(SharedLight, FindsThePixelThatHoldsThePoint) {
   }
 }
 
-// Numerical extremes (DESIGN.md): never a NaN, never a crash.
+// Numerical extremes: never a NaN, never a crash.
 
 TEST(Temporal, ExtremeInputsGiveFiniteResults) {
   const Shot spec;

@@ -92,7 +92,7 @@ struct LayoutPreset {
   NormalSpace normal_space = NormalSpace::kWorld;
   bool direct_includes_albedo = false;
   // True for renderers that do not sample emissive surfaces as lights, so emission must be
-  // gathered by the march (see DESIGN.md, "Radiance gathered").
+  // gathered by the rays (ssgi-run(1), --gather-emission).
   bool gather_emission = false;
   // Planar depth, after conversion by depth_kind and in the file's own units, at or beyond
   // which a pixel is background (besides inf, NaN and depth <= 0).

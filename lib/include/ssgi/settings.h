@@ -119,7 +119,7 @@ struct GiSettings {
   int trace_width = 480;
   // Longest ray, in camera-space scene units; 0: until the ray leaves the screen.
   double max_distance = 0;
-  // Surface model (lib/src/surface_model.h): a depth pixel is a slab from its depth z to
+  // Surface model (lib/src/gi/surface_model.h): a depth pixel is a slab from its depth z to
   // z * (1 + thickness) behind it.
   double thickness = 0.1;
   // A ray starts this fraction of the pixel's depth off the surface along its normal, so that
