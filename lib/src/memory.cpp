@@ -307,8 +307,8 @@ MemoryEstimate estimate_run_memory(const SequenceInfo& seq, const Plan& plan, co
   const std::uint64_t ahead = read_twice ? std::max(frame, finishing_passes + strip) : frame;
   const std::uint64_t overlap = (in_flight >= 2 ? ahead : 0) + (in_flight >= 3 ? writing : 0);
   // The program, its libraries (OIIO's plugins, OCIO) and the allocator's pools, and per worker
-  // its stack and buffers: 149 MiB measured on 1 thread, 153 on 2, 158 on 4 (`/usr/bin/time -f
-  // %M ssgi run testdata/sample/sample.####.exr -o OUT --threads N`).
+  // its stack and buffers: sized from the peak of runs on a frame too small to weigh
+  // (tests/bench/README.md, "The memory estimate").
   const std::uint64_t program = 140 * kMiB + static_cast<std::uint64_t>(threads) * 4 * kMiB;
 
   MemoryEstimate e;

@@ -46,8 +46,8 @@ struct MemoryEstimate {
 // workers (the frames the temporal window keeps, a frame's planes while it is lit, finished and
 // written, the tracer's hits and scene, the denoiser, the writer's strips, and the frames in
 // flight besides the one lit: memory.frames_in_flight), from the first frame's header alone.
-// Measured against the peak resident size of rendered 1080p and 4K shots
-// (tests/bench/rendered.sh): 2 to 11% above it.
+// How far above the measured peaks it lies: tests/bench/README.md, "Rendered 1080p and 4K" and
+// "The memory estimate".
 MemoryEstimate estimate_run_memory(const SequenceInfo& sequence, const Plan& plan,
                                    const GiSettings& settings, const WriteOptions& write,
                                    int threads, const PipelineMemory& memory);

@@ -41,9 +41,10 @@ TraceGrid make_trace_grid(const GBuffer& g, bool with_emission, int scale, float
 // Entries that rows traced in parallel make, held until they are joined in row order
 // (join_rows): each thread copies the rows it finishes, one after the other, into blocks of its
 // own from allocate_block, so that a frame's entries fault in a few 2 MB pages rather than a
-// vector per row in 4 KB ones (a page fault costs 20 us on a two-core virtual machine; one
-// thread's faults wait for the other's). The blocks are held until the RowEntries goes, so that
-// joining holds the entries twice (a 1080p frame's hits: 16 MB, against the frame's 8 MB planes).
+// vector per row in 4 KB ones (page faults are slow, and one thread's wait for another's:
+// tests/bench/README.md, "Rendered 1080p and 4K"). The blocks are held until the RowEntries
+// goes, so that joining holds the entries twice (a 1080p frame's hits: 16 MB, against the
+// frame's 8 MB planes).
 template <typename T>
 class RowEntries {
  public:
