@@ -8,10 +8,10 @@ namespace ssgi_cli {
 
 // The allocator gives back every block it frees instead of keeping frame-sized ones for reuse,
 // so that a run's peak is its largest phase's (estimate_run_memory) rather than the phases'
-// sum: a farm slot is sized by the peak. Kept, the blocks saved page faults but added one
-// phase's planes to the next (1080p rendered shot, --frames-in-flight 2: 1065 MiB measured
-// against 933 MiB of the phases' largest; tests/bench/rendered.sh). Nothing with glibc's
-// allocator, which returns large blocks itself.
+// sum: a farm slot is sized by the peak. Kept, the blocks save page faults but add one phase's
+// planes to the next (both measured in tests/bench/README.md, "Rendered 1080p and 4K", the
+// table of the program's allocator). Nothing with glibc's allocator, which returns large blocks
+// itself.
 #if SSGI_FAST_MALLOC
 void keep_no_freed_blocks();
 #else
