@@ -15,8 +15,9 @@ struct PresetRow {
   int slices, max_steps, trace_width, bounces, multiframe;
 };
 
-// Measured on the sample scenes and the 1080p benchmark (README, "Speed"); multiframe costs
-// final about 3x its time (README, "Multiframe"), within its budget, not the default's.
+// Time against error, measured in tests/sweep/README.md (the sample scenes) and
+// tests/bench/README.md, "GI per frame" (1080p, with --multiframe's cost). final also continues
+// missed rays through the window's other frames: a cost a final render affords, not the default.
 constexpr PresetRow kPresets[] = {
     {"draft", 1, 16, 240, 4, 0},
     {"default", 2, 28, 480, 8, 0},

@@ -65,7 +65,7 @@ struct LayerStats {
 
 // How to compare.
 struct CompareOptions {
-  bool compute_ssim = true;  // SSIM costs ~20x the rest; skip it when it is not reported
+  bool compute_ssim = true;  // SSIM costs far more than the rest; skip it when not reported
   // Without a background mask, leave out of a layer's metrics the pixels where all its
   // reference channels are exactly 0 (background of a GI layer, which both sides get right).
   bool exclude_zero_reference = true;

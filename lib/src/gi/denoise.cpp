@@ -368,8 +368,8 @@ Image upsample_and_denoise(const Image& light, int light_level, const Image& dep
           [&](int, std::vector<float>*) { return fine; }, own, own_level - l, terms);
     }
     // Finer than the traced light there is no noise of its own to blur, only the upsampling's
-    // steps, which the depth-aware taps already follow (measured: relRMSE unchanged to 3e-4 on
-    // the 1080p sample frames, the denoiser 40% faster).
+    // steps, which the depth-aware taps already follow: a blur there would cost time and hardly
+    // change the light.
     if (denoise && settings.upsample_blur_radius > 0 && l >= entry) {
       // The blur's spatial sigma is its radius: a gentle 3x3 at the default radius 1.
       out = joint_bilateral(out, levels[l].guides, settings.upsample_blur_radius,

@@ -187,8 +187,8 @@ MissModel::MissModel(const GBuffer& g, MissMode mode, const Environment& env)
       // the sides the frame cannot show, right, left and behind, though its border may show
       // few surfaces facing them (furniture along an office's sides). Ahead the frame shows
       // the far wall itself, which rays heading forward meet on screen: that enclosure stays
-      // as measured (closed too, a playroom whose far wall is mid-frame came out 1.27x too
-      // bright; tests/accuracy/training.sh).
+      // as measured (closed too, it lights a room whose far wall is mid-frame too brightly:
+      // tests/accuracy/README.md, "Measured and not kept").
       {
         const float room = std::min(enclosed_[2], enclosed_[3]) * (1.0f - ground_);
         for (const int f : {0, 1, 5}) enclosed_[f] = std::max(enclosed_[f], room);
