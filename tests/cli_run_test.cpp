@@ -186,8 +186,9 @@ TEST_F(Cli, ARegionRenderWithItsContextGetsTheWholeFramesLight) {
 // A region render run alone is warned about, suggesting --context, and gets no more than the
 // whole frame's light over its pixels. The region is the centre of `moving`, a floor and wall lit
 // by a spot, whose surroundings are dark (as the Cycles stage's): its misses must not bring the
-// lit centre's light in place of the dark border it cannot see (1.30x the whole frame's when they
-// did). One frame, whole and cropped, so that neither has temporal neighbours.
+// lit centre's light in place of the dark border it cannot see, which would light it brighter
+// than the whole frame does. One frame, whole and cropped, so that neither has temporal
+// neighbours.
 TEST_F(Cli, ARegionRenderAloneIsWarnedAndGetsNoMoreThanTheWholeFramesLight) {
   const OIIO::ROI region(16, 48, 8, 40);  // 32x32 at (16, 8) of the 64x48 display window
   fs::copy_file(testdata("moving/moving.0001.exr"), path("whole.0001.exr"));
