@@ -363,9 +363,9 @@ class ReferenceTracer {
 // Pixel (x, y)'s rays (the march's, PixelRays): the pixel each one's light comes from, -1 for
 // a miss, into hit[0, rays); the number of misses and the sums of what `misses` gives them, in
 // ray order, into *missed, env[3] and cube[kCubeFaces].
-void trace_pixel(const GBuffer& g, const GiSettings& settings, const ReferenceTracer& tracer,
-                 const MissModel& misses, int x, int y, std::int32_t* hit, int* missed,
-                 float env[3], float cube[kCubeFaces]) {
+void trace_reference_pixel(const GBuffer& g, const GiSettings& settings,
+                           const ReferenceTracer& tracer, const MissModel& misses, int x, int y,
+                           std::int32_t* hit, int* missed, float env[3], float cube[kCubeFaces]) {
   const PixelRays rays(g, settings, x, y);
   std::fill(env, env + 3, 0.0f);
   std::fill(cube, cube + kCubeFaces, 0.0f);
@@ -393,8 +393,8 @@ RayHits trace_reference(const GBuffer& g, const GiSettings& settings, const Miss
       const std::size_t pixel = static_cast<std::size_t>(y) * w + x;
       int missed;
       float env[3], cube[kCubeFaces];
-      trace_pixel(g, settings, tracer, misses, x, y, &hits.hit[pixel * hits.rays], &missed, env,
-                  cube);
+      trace_reference_pixel(g, settings, tracer, misses, x, y, &hits.hit[pixel * hits.rays],
+                            &missed, env, cube);
       hits.store_misses(pixel, missed, env, cube);
     }
   });
@@ -421,7 +421,8 @@ struct ReferenceHits::Impl {
       if (!g.is_surface(x, y)) continue;
       int missed;
       float env_sum[3], cube_sum[kCubeFaces];
-      trace_pixel(g, settings, tracer, misses, x, y, rays.data(), &missed, env_sum, cube_sum);
+      trace_reference_pixel(g, settings, tracer, misses, x, y, rays.data(), &missed, env_sum,
+                            cube_sum);
       for (const std::int32_t hit : rays)
         if (hit >= 0) pixel->push_back(hit);
       const std::size_t p = static_cast<std::size_t>(y) * w + x;
