@@ -145,7 +145,7 @@ TEST(Pipeline, CoverageIsTheShareOfTheLightTheTracedRaysBrought) {
   }
 }
 
-// Multiframe (lib/src/gi/multiframe.h): a lit face that only a neighbouring frame shows. Frame 2
+// Multiframe (lib/src/gi/continuation.h): a lit face that only a neighbouring frame shows. Frame 2
 // sees the groove head-on, its lit upper face from the crease to the frame's top; frame 1 is
 // the same groove from a camera moved by (0.4, 0, -0.5) and pitched 6 degrees down (half its
 // vertical field of view is 3.75), so that it shows the dark lower face alone: the rays its pixels

@@ -1,5 +1,5 @@
-// Views (--view, lib/src/io/views.h and continue_in_views in gi/multiframe.h): light that only a
-// view shows, behind the camera. The scene is two parallel infinite walls: one in frame, facing
+// Views (--view, lib/src/io/views.h and continue_missed_rays in gi/continuation.h): light that only
+// a view shows, behind the camera. The scene is two parallel infinite walls: one in frame, facing
 // the camera at z = kFront, dark; one behind the camera at z = -kBack, facing it and lit, so
 // that it reflects kLit. Every ray of the front wall's cosine-weighted hemisphere meets the back
 // wall: with one bounce its indirect light is kLit exactly. The frame alone does not show the
@@ -15,8 +15,8 @@
 
 #include "frame_stages.h"
 #include "gi/composite.h"
+#include "gi/continuation.h"
 #include "gi/misses.h"
-#include "gi/multiframe.h"
 #include "gi/slices.h"
 #include "gi/surface_model.h"
 #include "gi/trace_grid.h"
@@ -307,7 +307,7 @@ Image light_with_faces(const Shot& shot, const GiSettings& s, SceneFrom from) {
 }
 
 // A ray that passes behind something the views show and meets nothing they show takes what lay
-// behind it where it was last seen (continue_in_views). Behind the camera, a dark ledge at z =
+// behind it where it was last seen (continue_missed_rays). Behind the camera, a dark ledge at z =
 // -kLedge across the rows kLedgeLow..kLedgeHigh hides part of the lit back wall from the camera:
 // rays from the front wall that pass above the ledge meet the back wall there, hidden. Last seen
 // in front of the back wall, heading for it, they take its light; the miss model (black here)
@@ -374,11 +374,11 @@ TEST(Views, RaysHiddenBehindWhatTheViewsShowTakeTheSurfaceTheyWereHeadingFor) {
 }
 
 // The views light one another in passes (FrameStages::light_views): the first continues each
-// view's missed rays in the others (continue_in_views), the later ones bring the others' newer
-// light along the same rays (view_light), which must be what the first brought for the same
+// view's missed rays in the others (continue_missed_rays), the later ones bring the others' newer
+// light along the same rays (source_light), which must be what the first brought for the same
 // light, the rays that took a surface they were last seen heading for included. Each face of the
 // ledge scene lit alone keeps its missed rays; continued in the other faces, each face's light
-// from them against view_light's for the same rays and light.
+// from them against source_light's for the same rays and light.
 TEST(Views, LaterPassesAmongViewsBringWhatTheFirstFound) {
   GiSettings s = view_settings();
   s.bounces = 3;
@@ -393,22 +393,19 @@ TEST(Views, LaterPassesAmongViewsBringWhatTheFirstFound) {
   for (const GBuffer& face : faces) alone.push_back(stages.light_views({face}));
   std::size_t hidden = 0;
   for (std::size_t i = 0; i < faces.size(); ++i) {
-    std::vector<const detail::FrameTrace*> others;
-    std::vector<const Image*> lights;
+    std::vector<detail::ContinuationSource> others;
     for (std::size_t j = 0; j < faces.size(); ++j)
-      if (j != i) {
-        others.push_back(alone[j].traces[0].get());
-        lights.push_back(&alone[j].light[0]);
-      }
-    detail::FrameTrace t = *alone[i].traces[0];
-    detail::ViewsReport report;
-    detail::ViewHits found;
-    detail::continue_in_views(&t, others, lights, s, false, &report, &found);
-    const Image again = detail::view_light(t, found, others, lights, s);
+      if (j != i) others.push_back({alone[j].traces[0].get(), &alone[j].light[0]});
+    const detail::FrameTrace& t = *alone[i].traces[0];
+    const detail::Continuation continued =
+        detail::continue_missed_rays(t, {t.hits.miss, t.hits.env, t.hits.cube, t.hits.foreign},
+                                     others, detail::views_policy(), s, false, true);
+    const detail::ContinuationReport& report = continued.report;
+    const Image again = detail::source_light(t, continued.found, others, s);
     double first = 0, later = 0;
     for (int k = 0; k < 3; ++k)
       for (std::size_t p = 0; p < again.plane_size(); ++p) {
-        first += t.hits.foreign.plane(k)[p];
+        first += continued.shares.foreign.plane(k)[p];
         later += again.plane(k)[p];
       }
     std::printf("face %zu: %s; light %.4f, again %.4f\n", i, report.describe(1).c_str(), first,

@@ -6,10 +6,10 @@
 #include <cmath>
 
 #include "gi/composite.h"
+#include "gi/continuation.h"
 #include "gi/denoise.h"
 #include "gi/gather.h"
 #include "gi/march.h"
-#include "gi/multiframe.h"
 #include "gi/slices.h"
 #include "parallel.h"
 #include "reference/reference.h"
@@ -90,7 +90,7 @@ int pyramid_level(int scale) {
   return level;
 }
 
-// With views, a trace sample's shares of the miss model can fall below zero (multiframe.h,
+// With views, a trace sample's shares of the miss model can fall below zero (continuation.h,
 // kViewRunsPerSlice), and so can the light of a sample that has little: the denoised light,
 // which averages them, is held at zero.
 Image held_at_zero(Image light) {
@@ -143,15 +143,14 @@ Image FrameStages::trace(const GBuffer& g, GBuffer* grid_out, Image* coverage,
         trace_slices(g, grid, s, misses, &missed, keep ? kept_runs : kViewRunsPerSlice);
     auto t = std::make_shared<FrameTrace>(g.frame, g.camera, std::move(grid), std::move(hits),
                                           misses, std::move(missed));
-    std::vector<const FrameTrace*> traces;
-    std::vector<const Image*> lights;
-    for (std::size_t i = 0; i < views->traces.size(); ++i) {
-      traces.push_back(views->traces[i].get());
-      lights.push_back(&views->light[i]);
-    }
-    ViewsReport report;
-    continue_in_views(t.get(), traces, lights, s, keep != nullptr, &report);
-    log_info(report.describe(g.frame));
+    std::vector<ContinuationSource> sources;
+    for (std::size_t i = 0; i < views->traces.size(); ++i)
+      sources.push_back({views->traces[i].get(), &views->light[i]});
+    Continuation continued = continue_missed_rays(*t, take_shares(&t->hits), sources,
+                                                  views_policy(), s, keep != nullptr);
+    log_info(continued.report.describe(g.frame));
+    put_shares(std::move(continued.shares), &t->hits);
+    if (continued.walked) t->missed = std::move(continued.left);
     Image light = gather_bounces(t->grid, t->hits, s.bounces, misses, coverage, cube);
     if (shares) *shares = t->hits.cube;
     if (keep) *keep = std::move(t);
@@ -201,25 +200,27 @@ LitViews FrameStages::light_views(const std::vector<GBuffer>& views) const {
   // Light bounces among the views: each one's missed rays continued in the others, which bring
   // their light of the pass before, one more bounce among them each pass (the hits found once).
   if (n < 2) return out;
-  std::vector<ViewHits> found(n);
-  std::vector<std::vector<const FrameTrace*>> others(n);
-  for (std::size_t i = 0; i < n; ++i)
-    for (std::size_t j = 0; j < n; ++j)
-      if (j != i) others[i].push_back(out.traces[j].get());
+  std::vector<SourceHits> found(n);
   std::vector<char> continued(n, 0);
   const int passes = std::min(kViewPasses, std::max(1, settings_.bounces - 1));
   for (int pass = 0; pass < passes; ++pass) {
     std::vector<Image> again(n);
     parallel_for_rows(static_cast<int>(n), [&](int i) {
-      std::vector<const Image*> lights;
+      std::vector<ContinuationSource> others;
       for (std::size_t j = 0; j < n; ++j)
-        if (j != static_cast<std::size_t>(i)) lights.push_back(&out.light[j]);
+        if (j != static_cast<std::size_t>(i))
+          others.push_back({out.traces[j].get(), &out.light[j]});
       FrameTrace& t = *out.traces[i];
-      if (pass == 0)
-        continued[i] =
-            continue_in_views(&t, others[i], lights, settings_, false, nullptr, &found[i]);
-      else if (continued[i])
-        t.hits.foreign = view_light(t, found[i], others[i], lights, settings_);
+      if (pass == 0) {
+        Continuation c = continue_missed_rays(t, take_shares(&t.hits), others, views_policy(),
+                                              settings_, false, true);
+        put_shares(std::move(c.shares), &t.hits);
+        if (c.walked) t.missed = MissedRays();
+        found[i] = std::move(c.found);
+        continued[i] = c.changed();
+      } else if (continued[i]) {
+        t.hits.foreign = source_light(t, found[i], others, settings_);
+      }
       again[i] = continued[i]
                      ? held_at_zero(denoise_on_grid(
                            views[i], gather_bounces(t.grid, t.hits, settings_.bounces, t.misses)))
@@ -312,15 +313,17 @@ bool FrameStages::continue_light(const GBuffer& g, const std::vector<const Trace
     lights.push_back(&window[i]->light);
   }
   if (c < 0) return false;
-  ContinuationReport report;
-  Image shares;
-  const bool continued = continue_rays(frames, lights, c, settings_, light, coverage,
-                                       miss_shares ? &shares : nullptr, &report);
-  log_info(report.describe(frames[c]->frame));
-  if (!continued) return false;
-  *light = denoise_on_grid(g, std::move(*light));  // as trace_light's
-  if (miss_shares && shares.channels() == kCubeFaces)
-    *miss_shares = denoise_on_grid(g, grouped_shares(shares));
+  const FrameTrace& self = *frames[c];
+  const Continuation continued =
+      continue_missed_rays(self, {self.hits.miss, self.hits.env, self.hits.cube, self.hits.foreign},
+                           window_sources(frames, lights, c), frames_policy(), settings_);
+  log_info(continued.report.describe(self.frame));
+  if (!continued.changed()) return false;  // nothing changes: no need to gather again
+  // Denoised as trace_light's.
+  *light =
+      denoise_on_grid(g, gather_continued(self, continued.shares, settings_.bounces, coverage));
+  if (miss_shares && continued.shares.cube.channels() == kCubeFaces)
+    *miss_shares = denoise_on_grid(g, grouped_shares(continued.shares.cube));
   return true;
 }
 

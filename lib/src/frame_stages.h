@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
+#include "gi/continuation.h"
 #include "gi/environment.h"
 #include "gi/misses.h"
-#include "gi/multiframe.h"
 #include "gi/temporal.h"
 #include "ssgi/color.h"
 #include "ssgi/gbuffer.h"
@@ -41,7 +41,7 @@ class FrameStages {
 
   // The frame's views (each as read_views gives it: a pinhole G-buffer with a world transform)
   // lit as frames are, each at its own resolution, with their rays continued in one another
-  // (continue_in_views) so that light bounces among them; each view's `frame` numbers its noise
+  // (continue_missed_rays) so that light bounces among them; each view's `frame` numbers its noise
   // (read_views gives it the shot's). Empty when the plan continues rays in no view (Plan::views).
   LitViews light_views(const std::vector<GBuffer>& views) const;
 
@@ -52,7 +52,7 @@ class FrameStages {
   // Plan::multiframe: TracedLight::light and ::coverage of window[center] (frame `frame`) with
   // its missed rays continued in the other frames of `window` (TracedLight of each, ascending
   // frame order, within Plan::multiframe frames of the centre). False, and nothing written,
-  // when none could be (gi/multiframe.h); -v reports how many were and found a surface. With
+  // when none could be (gi/continuation.h); -v reports how many were and found a surface. With
   // `miss_shares`, the shares of the misses left (as TracedLight::miss_shares: grouped,
   // denoised as the light is).
   bool continue_light(const GBuffer& frame, const std::vector<const TracedLight*>& window,
@@ -85,7 +85,7 @@ class FrameStages {
   // with `reflected` the light the samples reflect.
   // With `views` (not empty), the missed rays are continued in them before the bounces.
   // What the miss model decided (-v) goes to the log, or with `misses_note` there. The missed
-  // rays kept are `kept_runs` per slice (multiframe.h: kViewRunsPerSlice for a view's, which only
+  // rays kept are `kept_runs` per slice (continuation.h: kViewRunsPerSlice for a view's, which only
   // the other views continue); those the views alone continue, kViewRunsPerSlice.
   Image trace(const GBuffer& g, GBuffer* grid_out, Image* coverage,
               std::shared_ptr<FrameTrace>* keep = nullptr, CubeLight* cube = nullptr,

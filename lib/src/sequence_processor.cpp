@@ -17,7 +17,7 @@
 #include <utility>
 
 #include "frame_stages.h"
-#include "gi/multiframe.h"
+#include "gi/continuation.h"
 #include "gi/temporal.h"
 #include "io/views.h"
 #include "parallel.h"

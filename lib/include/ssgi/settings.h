@@ -137,7 +137,7 @@ struct GiSettings {
   DenoiseSettings denoise_settings;
   TemporalMode temporal = TemporalMode::kWindow;
   int temporal_radius = 2;  // window: +-K frames
-  // Rays that miss continued in up to this many frames on each side (lib/src/gi/multiframe.h;
+  // Rays that miss continued in up to this many frames on each side (lib/src/gi/continuation.h;
   // within the temporal window, which reads them anyway); 0: off, kMultiframeWindow: the
   // whole window.
   int multiframe = 0;

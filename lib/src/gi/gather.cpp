@@ -91,8 +91,8 @@ void gather_once(const TraceGrid& grid, const HitSource& hits, const Radiance& r
           from_hits += foreign->plane(c)[s];
         }
       const std::uint32_t first = row.begin[bx], end = row.begin[bx + 1];
-      // Two loops rather than one with the coverage's sum under a flag: that version (a
-      // template flag and if constexpr) measured 25 -> 50 ms for a 1080p frame's 8 bounces.
+      // Two loops rather than one with the coverage's sum under a flag (a template flag and
+      // if constexpr), which ran the bounces slower (BM_Bounces, tests/bench_stages.cpp).
       if (coverage) {
         for (std::uint32_t e = first; e < end; ++e) {
           const std::array<float, 3> l = radiance(row.pixel[e]);

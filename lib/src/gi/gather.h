@@ -37,7 +37,7 @@ struct WeightedHits {
   Image env;   // 3 channels: environment light of those directions
   Image cube;  // kCubeFaces channels: their shares of the miss model's cube
   // 3 channels or absent: light that missed rays continued in the frame's views brought
-  // (multiframe.h, continue_in_views), counted as traced; their shares are out of the three above.
+  // (continuation.h, continue_missed_rays), counted as traced; their shares are out of the three above.
   Image foreign;
   std::size_t entries() const { return pixel.size(); }
   // Row `by`'s hits, of a grid `width` samples across.
@@ -69,7 +69,7 @@ class HitSource {
   virtual const Image& env() const = 0;
   virtual const Image& cube() const = 0;
   // Per trace sample, light that continued rays brought from other frames (3 channels,
-  // multiframe.h), the same in every bounce, counted as traced; null when there is none.
+  // continuation.h), the same in every bounce, counted as traced; null when there is none.
   virtual const Image* foreign() const { return nullptr; }
 };
 

@@ -293,7 +293,7 @@ struct SliceTracer {
     return std::numeric_limits<float>::infinity();
   }
 
-  // The missed sectors of a slice as rays for other frames to continue (multiframe.h): the
+  // The missed sectors of a slice as rays for other frames to continue (continuation.h): the
   // missed sectors in order, cut into `missed_runs` runs of (nearly) equal count, and per
   // run the ray of one of its sectors, drawn at random, weighing the whole run: an unbiased
   // estimate of what the run's rays would find. The ray's angle inverts the slice's measure by

@@ -18,7 +18,7 @@
 
 #include "gi/gather.h"
 #include "gi/misses.h"
-#include "gi/multiframe.h"
+#include "gi/continuation.h"
 #include "ssgi/gbuffer.h"
 #include "ssgi/settings.h"
 
@@ -27,7 +27,7 @@ namespace ssgi::detail {
 // settings.slices slices per trace origin, settings.max_steps samples along each side of each.
 // The result is the same for any thread count. With `missed`, also the directions of the misses
 // (each slice's missed sectors cut into `missed_runs` runs, one sector's ray drawn from each,
-// weighing its run) for the views or the shot's other frames to continue (multiframe.h).
+// weighing its run) for the views or the shot's other frames to continue (continuation.h).
 WeightedHits trace_slices(const GBuffer& g, const TraceGrid& grid, const GiSettings& settings,
                           const MissModel& misses, MissedRays* missed = nullptr,
                           int missed_runs = kMultiframeRunsPerSlice);

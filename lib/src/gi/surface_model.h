@@ -116,7 +116,7 @@ class DepthMesh {
 
   // Also joins neighbours that lie on each other's tangent planes (each within kSmoothTolerance
   // of its depth of the other's), as the pixels of a plane seen at a grazing angle do although
-  // their depths differ by more than a slab. For views (multiframe.h, continue_in_views), whose
+  // their depths differ by more than a slab. For views (continuation.h, continue_missed_rays), whose
   // few pixels see much of the scene at such angles; `normal` is per pixel, (fx, fy, cx, cy) the
   // camera in its pixels.
   void join_tangent_neighbours(const Image& depth, const Image& normal, float fx, float fy,
@@ -124,7 +124,7 @@ class DepthMesh {
 
   // Keeps the bounds clear_of, tile_clear_of and in_front_at read, per quad and per tile of
   // kTile x kTile quads: for meshes that many rays walk (the views' and the other frames' in
-  // multiframe.h), which rarely meet most of what they cross. Again after the triangles change.
+  // continuation.h), which rarely meet most of what they cross. Again after the triangles change.
   void bound_quads();
   bool bounded() const { return !quad_front_.empty(); }
   static constexpr int kTile = 4;

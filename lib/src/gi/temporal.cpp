@@ -47,11 +47,8 @@ constexpr double kMinHistoryWeight = 0.05;
 // The indirect light arrives denoised, so its spatial sigma underestimates how much a pixel
 // varies from frame to frame (the residual noise is blotches larger than 3x3): sigma gets a
 // floor of this fraction of the mean, so that noise is averaged and larger change is clipped.
-// Without the floor the clip removes most of the noise reduction. With the default GI settings
-// the residual noise on the sample data's `stage` is ~11% per frame; over floors 0 / 0.1 /
-// 0.25 / none, the window's error against DiffInd there is 0.283 / 0.279 / 0.276 / 0.281
-// relative RMSE (0.289 without temporal filtering) and its frame-to-frame change 11% / 9% /
-// 6% / 4% of the light (12% without): 0.25 is the least error.
+// Without the floor the clip removes most of the noise reduction; 0.25 gave the least error
+// (tests/accuracy/README.md, "Temporal stability").
 constexpr double kClipGamma = 1.0;
 constexpr double kClipRelativeFloor = 0.25;
 constexpr int kClipRadius = 1;

@@ -1,6 +1,6 @@
 // Extra views of a shot's scene (--view, --latlong-view): other cameras on the same scene at the
 // same time, such as the six faces of a cube or a lat-long panorama rendered at the shot camera,
-// whose surfaces the frame's missed rays continue to (gi/multiframe.h, continue_in_views). A
+// whose surfaces the frame's missed rays continue to (gi/continuation.h, continue_missed_rays). A
 // view is read as a frame is (the shot's layout, --channel mapping and conventions; its own
 // camera from its own header, its own resolution); a lat-long view becomes six pinhole cube
 // faces, so that every view is marched alike.

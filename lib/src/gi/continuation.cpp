@@ -1,4 +1,4 @@
-#include "gi/multiframe.h"
+#include "gi/continuation.h"
 
 #include <algorithm>
 #include <array>
@@ -122,10 +122,10 @@ void add_hit_light(const FrameTrace& t, const std::vector<std::array<float, 3>>&
   }
 }
 
-// What a trace sample's continued rays found: their light, the environment's light of those
+// What a trace sample's continued rays bring: their light, the environment's light of those
 // known to reach the sky, and the shares of the miss model they no longer leave to it (their
 // environment light, cube shares and weight).
-struct Found {
+struct ContinuedSample {
   float light[3] = {0, 0, 0}, sky[3] = {0, 0, 0}, env[3] = {0, 0, 0}, cube[kCubeFaces] = {};
   float miss = 0;
 
@@ -136,30 +136,31 @@ struct Found {
     miss += ray.weight;
   }
 
-  // Into sample s: the light added to `foreign`, the shares taken out of `env`, `cube` and
-  // `miss`, the sky's light added to `env` (the environment's light, as the misses' is). The
+  // Into sample s of `shares`: the light added to `foreign`, the shares taken out of env, cube
+  // and miss, the sky's light added to env (the environment's light, as the misses' is). The
   // tracer summed the shares over its bins of equal angle, and a ray's stand for its whole run
   // of sectors, so they are not exactly what is taken out (kViewRunsPerSlice): with
   // `hold_at_zero`, each share is held at zero, which biases the light up; else only the weight
-  // is. (Shrinking all the shares by the found part of the misses instead measured worse: it
-  // leaves part of the found direction's share in place, counting that light twice.)
-  void apply(std::size_t s, bool hold_at_zero, Image* foreign, Image* env_share, Image* cube_share,
-             Image* miss_share) const {
+  // is. (Shrinking all the shares by the found part of the misses instead leaves part of the
+  // found direction's share in place, counting that light twice.)
+  void apply(std::size_t s, bool hold_at_zero, MissShares* shares) const {
     const float floor = hold_at_zero ? 0.0f : -std::numeric_limits<float>::infinity();
     for (int c = 0; c < 3; ++c) {
-      foreign->plane(c)[s] += light[c];
-      env_share->plane(c)[s] = std::max(env_share->plane(c)[s] - env[c], floor) + sky[c];
+      shares->foreign.plane(c)[s] += light[c];
+      shares->env.plane(c)[s] = std::max(shares->env.plane(c)[s] - env[c], floor) + sky[c];
     }
     for (int f = 0; f < kCubeFaces; ++f)
-      cube_share->plane(f)[s] = std::max(cube_share->plane(f)[s] - cube[f], floor);
-    miss_share->plane(0)[s] = std::max(miss_share->plane(0)[s] - miss, 0.0f);
+      shares->cube.plane(f)[s] = std::max(shares->cube.plane(f)[s] - cube[f], floor);
+    shares->miss.plane(0)[s] = std::max(shares->miss.plane(0)[s] - miss, 0.0f);
   }
 };
 
-struct Neighbour {
+// A source as the frame's rays see it: its view, the rigid motions between the frame's camera
+// space and its own, and its index among the sources given.
+struct SourceView {
   const View* view;
   Rigid from_center, to_center;
-  std::uint32_t index = 0;  // continue_in_views: the view's index among those given
+  std::uint32_t index = 0;
 };
 
 // Where ray (o, d) (camera space, o inside the view) leaves the view of trace grid `g` (its
@@ -254,39 +255,7 @@ struct Frustum {
   }
 };
 
-// Walks row `by` of `self`'s trace grid: for each missed ray of each sample, `ray_body(s, o, ray,
-// jitter, t_from, &found)` with the sample, the rays' camera-space origin, the ray, its march
-// jitter and where the frame stops seeing its way free (where the tracer saw it pass behind what
-// the frame shows, else where it leaves the frame, or infinite when it never does); then each
-// sample's found light and shares go into the four images (Found::apply, `hold_at_zero`).
-template <typename RayBody>
-void walk_missed_rays(const FrameTrace& self, int by, const GiSettings& settings, bool hold_at_zero,
-                      Image* foreign, Image* env, Image* cube, Image* miss,
-                      const RayBody& ray_body) {
-  const TraceGrid& grid = self.grid;
-  for (int bx = 0; bx < grid.width; ++bx) {
-    const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
-    const std::uint32_t first = self.missed.begin[s], end = self.missed.begin[s + 1];
-    if (first == end) continue;
-    const Imath::V3f o = self.missed.origin[s];
-    Found found;
-    for (std::uint32_t k = first; k < end; ++k) {
-      const MissedRay& ray = self.missed.rays[k];
-      const float jitter = ray_jitter(s, k - first, self.frame, settings.seed);
-      const float t_from = std::min(ray.hidden, leaves_view(grid, o, ray.direction, o.z));
-      ray_body(s, o, ray, jitter, t_from, &found);
-    }
-    found.apply(s, hold_at_zero, foreign, env, cube, miss);
-  }
-}
-
-// A view is walked exactly however long the ray's segment in it: a view's few pixels each span
-// much of the scene, so that a segment sampled at --max-steps points steps past surfaces it meets
-// steeply (a ceiling's rays to the floor, found in the faces below it, brought 0.91 of the light
-// there: Views.EachFaceOfARoomLitOnItsFloorGetsItsShareOfTheFloor), and the walk, which skips
-// the empty space of the mesh's bounded quads, is no slower there than the samples
-// (BM_IndirectLightWithViews in tests/bench_stages.cpp). The neighbour frames of --multiframe, as
-// large as the frame, are sampled as its own march is.
+// ContinuationPolicy::every_pixel: march_in's step count that walks every pixel of a segment.
 constexpr int kEveryPixel = std::numeric_limits<int>::max();
 
 // Marches camera-space ray (o, d) of neighbour `n` from parameter t_from on (its origin at depth
@@ -342,8 +311,8 @@ std::int64_t sample_under(const TraceGrid& g, const Imath::V3f& q) {
 // view (in their order) whose picture holds d's vanishing point shows no surface at the trace
 // sample there. What a ray along d meets, if it meets nothing that any view shows, lies beyond
 // every surface the views show in its direction: there is none there.
-bool shows_sky(const std::vector<Neighbour>& views, const Imath::V3f& d) {
-  for (const Neighbour& n : views) {
+bool shows_sky(const std::vector<SourceView>& views, const Imath::V3f& d) {
+  for (const SourceView& n : views) {
     const TraceGrid& g = n.view->trace->grid;
     const std::int64_t i = sample_under(g, n.from_center.direction(d));
     if (i >= 0) return g.origin[i] < 0;
@@ -364,8 +333,8 @@ bool shows_sky(const std::vector<Neighbour>& views, const Imath::V3f& d) {
 constexpr int kLastSeenSamples = 64;
 
 struct LastSeen {
-  const Neighbour* view = nullptr;  // null: never seen in front of the sky or such a surface
-  std::int32_t sample = -1;         // the surface's trace sample, or -1 for the sky
+  const SourceView* view = nullptr;  // null: never seen in front of the sky or such a surface
+  std::int32_t sample = -1;          // the surface's trace sample, or -1 for the sky
 };
 
 // How many pixels out last_seen sets a view's sides to pass over the views that cannot hold a
@@ -377,7 +346,7 @@ constexpr float kReachMargin = 1.0f;
 // hold a point; `spans`, room for where the ray is inside them. Walks the points from the
 // farthest back: the first in front of the sky or of a surface facing the ray is the last seen,
 // and a point behind what a view shows found before it tells that the ray was hidden after.
-LastSeen last_seen(const std::vector<Neighbour>& views, const std::vector<Frustum>& reach,
+LastSeen last_seen(const std::vector<SourceView>& views, const std::vector<Frustum>& reach,
                    const Imath::V3f& o, const Imath::V3f& d, float max_distance,
                    std::vector<std::array<float, 2>>* spans) {
   const std::size_t count = views.size();
@@ -400,7 +369,7 @@ LastSeen last_seen(const std::vector<Neighbour>& views, const std::vector<Frustu
     const Imath::V3f p = o + t * d;
     for (std::size_t v = 0; v < count; ++v) {
       if (!(t >= (*spans)[v][0] && t <= (*spans)[v][1])) continue;
-      const Neighbour& n = views[v];
+      const SourceView& n = views[v];
       const TraceGrid& g = n.view->trace->grid;
       const Imath::V3f q = n.from_center.point(p);
       const std::int64_t i = sample_under(g, q);
@@ -438,29 +407,59 @@ bool seen_past(const View& center, const Imath::V3f& x) {
   return !std::isfinite(z);
 }
 
-// The centre's hits with the continued rays' light added and their miss shares taken out.
-class ContinuedHits final : public HitSource {
+// A frame's hits with a continuation's shares: the continued rays' light added, their miss
+// shares taken out.
+class HitsWithShares final : public HitSource {
  public:
-  ContinuedHits(const FrameTrace& t, Image miss, Image env, Image cube, Image foreign)
-      : width_(t.grid.width),
-        hits_(t.hits),
-        miss_(std::move(miss)),
-        env_(std::move(env)),
-        cube_(std::move(cube)),
-        foreign_(std::move(foreign)) {}
+  HitsWithShares(const FrameTrace& t, const MissShares& shares)
+      : width_(t.grid.width), hits_(t.hits), shares_(shares) {}
   HitRow row(int by, HitScratch*) const override { return hits_.row(by, width_); }
-  const Image& miss() const override { return miss_; }
-  const Image& env() const override { return env_; }
-  const Image& cube() const override { return cube_; }
-  const Image* foreign() const override { return &foreign_; }
+  const Image& miss() const override { return shares_.miss; }
+  const Image& env() const override { return shares_.env; }
+  const Image& cube() const override { return shares_.cube; }
+  const Image* foreign() const override { return &shares_.foreign; }
 
  private:
   int width_;
   const WeightedHits& hits_;
-  Image miss_, env_, cube_, foreign_;
+  const MissShares& shares_;
 };
 
 }  // namespace
+
+ContinuationPolicy views_policy() {
+  ContinuationPolicy p;
+  p.kind = ContinuationPolicy::Kind::kViews;
+  p.nearest = true;
+  p.every_pixel = true;
+  p.join_grazing = true;
+  p.hold_shares_at_zero = false;
+  p.sky_and_last_seen = true;
+  return p;
+}
+
+ContinuationPolicy frames_policy() {
+  ContinuationPolicy p;
+  p.kind = ContinuationPolicy::Kind::kFrames;
+  p.nearest = false;
+  p.every_pixel = false;
+  p.join_grazing = false;
+  p.hold_shares_at_zero = true;
+  p.sky_and_last_seen = false;
+  return p;
+}
+
+MissShares take_shares(WeightedHits* hits) {
+  return {std::move(hits->miss), std::move(hits->env), std::move(hits->cube),
+          std::move(hits->foreign)};
+}
+
+void put_shares(MissShares shares, WeightedHits* hits) {
+  hits->miss = std::move(shares.miss);
+  hits->env = std::move(shares.env);
+  hits->cube = std::move(shares.cube);
+  hits->foreign = std::move(shares.foreign);
+}
 
 FrameTrace::FrameTrace(int f, const Camera& c, TraceGrid g, WeightedHits h, MissModel m,
                        MissedRays r)
@@ -478,24 +477,22 @@ void FrameTrace::release_own() {
 
 std::string ContinuationReport::describe(int frame) const {
   std::ostringstream s;
-  s << "frame " << frame << ": multiframe: ";
-  if (frames.empty())
-    return s.str() +
-           "nothing continued (this frame's camera, or every other frame's in its window, has "
-           "no world transform, or theirs are this frame's own)";
-  s << rays << " missed rays continued in frames";
-  for (int f : frames) s << " " << f;
-  s << "; " << found << " met a surface";
-  if (moving) s << ", " << moving << " more met only surfaces the frame sees past (not taken)";
-  return s.str();
-}
-
-std::string ViewsReport::describe(int frame) const {
-  std::ostringstream s;
-  s << "frame " << frame << ": views: ";
-  if (views == 0) return s.str() + "nothing continued (no view has a world transform)";
-  s << rays << " missed rays continued in " << views << (views == 1 ? " view" : " views") << "; "
-    << found << " met a surface";
+  s << "frame " << frame;
+  if (kind == ContinuationPolicy::Kind::kFrames) {
+    s << ": multiframe: ";
+    if (sources.empty())
+      return s.str() +
+             "nothing continued (this frame's camera, or every other frame's in its window, has "
+             "no world transform, or theirs are this frame's own)";
+    s << rays << " missed rays continued in frames";
+    for (int f : sources) s << " " << f;
+    s << "; " << found << " met a surface";
+  } else {
+    s << ": views: ";
+    if (sources.empty()) return s.str() + "nothing continued (no view has a world transform)";
+    s << rays << " missed rays continued in " << sources.size()
+      << (sources.size() == 1 ? " view" : " views") << "; " << found << " met a surface";
+  }
   if (sky)
     s << ", " << sky
       << " reached the sky (the views show it in their direction, or where they were last seen "
@@ -507,154 +504,180 @@ std::string ViewsReport::describe(int frame) const {
   return s.str();
 }
 
-bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrace*>& views,
-                       const std::vector<const Image*>& light, const GiSettings& settings,
-                       bool keep_missed, ViewsReport* report, ViewHits* found_rays) {
-  FrameTrace& self = *self_trace;
-  ViewsReport local;
-  ViewsReport& r = report ? *report : local;
-  r = ViewsReport();
-  if (!self.camera.has_world_transform) return false;
-  std::vector<View> all;
-  all.reserve(views.size() + 1);
-  all.emplace_back(self, nullptr, false, false);  // the frame's own only tells what it sees
-  std::vector<Neighbour> neighbours;
-  for (std::size_t i = 0; i < views.size(); ++i) {
-    if (!views[i]->camera.has_world_transform) continue;
-    all.emplace_back(*views[i], settings.bounces > 1 ? light[i] : nullptr, true, true);
-    neighbours.push_back({&all.back(), between(self.camera, views[i]->camera),
-                          between(views[i]->camera, self.camera), static_cast<std::uint32_t>(i)});
+Continuation continue_missed_rays(const FrameTrace& self, MissShares shares,
+                                  const std::vector<ContinuationSource>& given,
+                                  const ContinuationPolicy& policy, const GiSettings& settings,
+                                  bool keep_missed, bool record_found) {
+  Continuation out;
+  ContinuationReport& r = out.report;
+  r.kind = policy.kind;
+  out.shares = std::move(shares);
+  if (!self.camera.has_world_transform) return out;
+  std::vector<View> views;
+  views.reserve(given.size() + 1);
+  // The frame's own only tells what it sees: its light is not read, nor its mesh marched.
+  views.emplace_back(self, nullptr, false, false);
+  std::vector<SourceView> sources;
+  for (std::size_t i = 0; i < given.size(); ++i) {
+    const FrameTrace& t = *given[i].trace;
+    if (!t.camera.has_world_transform) continue;
+    views.emplace_back(t, settings.bounces > 1 ? given[i].light : nullptr, policy.join_grazing,
+                       true);
+    sources.push_back({&views.back(), between(self.camera, t.camera),
+                       between(t.camera, self.camera), static_cast<std::uint32_t>(i)});
+    r.sources.push_back(t.frame);
   }
-  r.views = static_cast<int>(neighbours.size());
-  if (neighbours.empty() || self.missed.rays.empty()) return false;
-  const View& own = all.front();
+  if (sources.empty() || self.missed.rays.empty()) return out;
+  out.walked = true;
+  const View& own = views.front();
+  const std::size_t count = sources.size();
+  // The nearest surface: where the ray enters each source's view, and for the sky and last-seen
+  // rules, each view's sides a margin out.
   std::vector<Frustum> frusta, reach;
-  for (const Neighbour& n : neighbours) {
-    frusta.emplace_back(n.view->trace->grid, n.from_center);
-    reach.emplace_back(n.view->trace->grid, n.from_center, kReachMargin);
-  }
-  const std::size_t count = neighbours.size();
+  if (policy.nearest || policy.sky_and_last_seen)
+    for (const SourceView& n : sources) {
+      frusta.emplace_back(n.view->trace->grid, n.from_center);
+      reach.emplace_back(n.view->trace->grid, n.from_center, kReachMargin);
+    }
+  const int max_steps = policy.every_pixel ? kEveryPixel : settings.max_steps;
   const TraceGrid& grid = self.grid;
-  WeightedHits& hits = self.hits;
-  if (hits.foreign.empty()) hits.foreign = Image(grid.width, grid.height, 3);
-  // The rays still missed, row by row, for the shot's other frames to continue (multiframe).
+  MissShares& into = out.shares;
+  if (into.foreign.empty()) into.foreign = Image(grid.width, grid.height, 3);
+  // The rays still missed, and the found rays, row by row.
   std::vector<std::vector<MissedRay>> row_left(keep_missed ? grid.height : 0);
   std::vector<std::uint32_t> left_count(keep_missed ? grid.origin.size() : 0, 0);
-  // The found rays, row by row, when asked for.
-  std::vector<std::vector<ViewHit>> found_by_row(found_rays ? grid.height : 0);
-  std::vector<std::uint32_t> found_count(found_rays ? grid.origin.size() : 0, 0);
+  std::vector<std::vector<SourceHit>> found_by_row(record_found ? grid.height : 0);
+  std::vector<std::uint32_t> found_count(record_found ? grid.origin.size() : 0, 0);
   std::atomic<std::size_t> rays{0}, found{0}, sky{0}, hidden{0}, refused{0};
   struct Entering {
     float t;
     std::size_t n;
   };
+  const float t_end =
+      settings.max_distance > 0 ? static_cast<float>(settings.max_distance) : kFarFactor;
   parallel_for_rows(grid.height, [&](int by) {
     std::size_t row_rays = 0, row_found = 0, row_sky = 0, row_hidden = 0, row_refused = 0;
     std::vector<Entering> entering;
     entering.reserve(count);
-    // What the rays of one trace sample share, per view: their origin in its space and the
+    // What the rays of one trace sample share, per source: their origin in its space and the
     // values of its frustum's sides there.
-    std::size_t sample = ~std::size_t{0};
     std::vector<Imath::V3f> origin_in(count);
-    std::vector<std::array<float, 5>> sides_at(count);
+    std::vector<std::array<float, 5>> sides_at(policy.nearest ? count : 0);
     std::vector<std::array<float, 2>> spans;
-    const float t_end =
-        settings.max_distance > 0 ? static_cast<float>(settings.max_distance) : kFarFactor;
-    walk_missed_rays(
-        self, by, settings, false, &hits.foreign, &hits.env, &hits.cube, &hits.miss,
-        [&](std::size_t s, const Imath::V3f& o, const MissedRay& ray, float jitter, float t_from,
-            Found* found_here) {
-          // Views at the frame's own time: of the surfaces they show on the ray, the nearest.
-          const Neighbour* best = nullptr;
-          std::int32_t best_hit = -1;
-          float best_along = std::numeric_limits<float>::infinity();
-          bool was_refused = false;
-          if (!std::isinf(t_from)) {
-            ++row_rays;
-            // The views the ray passes through, in the order it enters them: a surface a view
-            // shows lies within the part of the ray inside its frustum, so once the nearest found
-            // is nearer than where the ray enters the next view, that view cannot show a nearer one
-            // (the six faces of a cube are each entered after the last is left).
-            if (s != sample) {
-              sample = s;
-              for (std::size_t i = 0; i < count; ++i) {
-                origin_in[i] = neighbours[i].from_center.point(o);
-                sides_at[i] = frusta[i].at(o, o.z);
-              }
-            }
-            entering.clear();
-            const float end = settings.max_distance > 0 ? t_end : t_end * o.z;
-            for (std::size_t i = 0; i < count; ++i) {
-              const float t_in = frusta[i].enters(sides_at[i], ray.direction, t_from, end);
-              if (!std::isinf(t_in)) entering.push_back({t_in, i});
-            }
-            // By where the ray enters, the views in their given order where that is the same.
-            std::sort(entering.begin(), entering.end(), [](const Entering& a, const Entering& b) {
-              return a.t < b.t || (a.t == b.t && a.n < b.n);
-            });
-            for (const Entering& e : entering) {
-              if (e.t >= best_along) break;
-              const Neighbour& n = neighbours[e.n];
-              const Imath::V3f& on = origin_in[e.n];
-              const Imath::V3f dn = n.from_center.direction(ray.direction);
-              const std::int32_t hit =
-                  march_in(*n.view, on, dn, t_from, o.z, jitter, settings, kEveryPixel);
-              if (hit < 0) continue;
-              const float along = (n.view->vertex(hit_pixel(hit)) - on).dot(dn);
-              if (!(along < best_along)) continue;
-              if (seen_past(own, n.to_center.point(on + along * dn))) {
-                was_refused = true;
-                continue;
-              }
-              best = &n;
-              best_hit = hit;
-              best_along = along;
-            }
-          }
-          // A view's trace sample `hit` found for the ray: its light (kept with `found_rays`,
-          // for the views' later passes among themselves), its shares out of the miss model.
-          auto take = [&](const Neighbour& n, std::int32_t hit) {
-            add_hit_light(*n.view->trace, n.view->light, hit, ray.weight, found_here->light);
-            if (found_rays) {
-              found_by_row[by].push_back({n.index, hit, ray.weight});
-              ++found_count[s];
-            }
-            found_here->take_shares(self.misses, ray);
-          };
-          if (best) {
-            take(*best, best_hit);
-            ++row_found;
-            return;
-          }
-          // Met nothing any view shows. Where a view shows the sky in its direction it reaches
-          // the sky; else it takes what lay behind it where it was last seen: a surface it was
-          // heading for, or the sky if it rises (falling, it meets the ground or something on
-          // it, which the miss model stands for).
-          if (!was_refused && !std::isinf(t_from)) {
-            const bool sky_ahead = shows_sky(neighbours, ray.direction);
-            const LastSeen seen =
-                sky_ahead ? LastSeen()
-                          : last_seen(neighbours, reach, o, ray.direction,
-                                      static_cast<float>(settings.max_distance), &spans);
-            if (sky_ahead ||
-                (seen.view && seen.sample < 0 && ray.direction.dot(self.misses.up()) > 0)) {
-              found_here->take_shares(self.misses, ray);
-              self.misses.add_sky(ray.direction, ray.weight, found_here->sky);
-              ++row_sky;
-              return;
-            }
-            if (seen.view && seen.sample >= 0) {
-              take(*seen.view, seen.sample);
-              ++row_hidden;
-              return;
-            }
-          }
-          if (was_refused) ++row_refused;
+    for (int bx = 0; bx < grid.width; ++bx) {
+      const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
+      const std::uint32_t first = self.missed.begin[s], end = self.missed.begin[s + 1];
+      if (first == end) continue;
+      const Imath::V3f o = self.missed.origin[s];
+      for (std::size_t i = 0; i < count; ++i) {
+        origin_in[i] = sources[i].from_center.point(o);
+        if (policy.nearest) sides_at[i] = frusta[i].at(o, o.z);
+      }
+      ContinuedSample sample;
+      for (std::uint32_t k = first; k < end; ++k) {
+        const MissedRay& ray = self.missed.rays[k];
+        // The frame has seen the ray's way free up to where it leaves the frame or passes
+        // behind something; what lies beyond, the sources tell.
+        const float t_from = std::min(ray.hidden, leaves_view(grid, o, ray.direction, o.z));
+        if (std::isinf(t_from)) {  // free all the way to its vanishing point
           if (keep_missed) {
             row_left[by].push_back(ray);
             ++left_count[s];
           }
-        });
+          continue;
+        }
+        ++row_rays;
+        const float jitter = ray_jitter(s, k - first, self.frame, settings.seed);
+        // The sources to march in: with `nearest`, those the ray passes through, in the order it
+        // enters them: a surface a view shows lies within the part of the ray inside its
+        // frustum, so once the nearest found is nearer than where the ray enters the next view,
+        // that view cannot show a nearer one (the six faces of a cube are each entered after
+        // the last is left); else all, in their order, until one shows a surface.
+        entering.clear();
+        if (policy.nearest) {
+          const float ray_end = settings.max_distance > 0 ? t_end : t_end * o.z;
+          for (std::size_t i = 0; i < count; ++i) {
+            const float t_in = frusta[i].enters(sides_at[i], ray.direction, t_from, ray_end);
+            if (!std::isinf(t_in)) entering.push_back({t_in, i});
+          }
+          // By where the ray enters, the sources in their given order where that is the same.
+          std::sort(entering.begin(), entering.end(), [](const Entering& a, const Entering& b) {
+            return a.t < b.t || (a.t == b.t && a.n < b.n);
+          });
+        } else {
+          for (std::size_t i = 0; i < count; ++i) entering.push_back({t_from, i});
+        }
+        const SourceView* best = nullptr;
+        std::int32_t best_hit = -1;
+        float best_along = std::numeric_limits<float>::infinity();
+        bool was_refused = false;
+        for (const Entering& e : entering) {
+          if (policy.nearest && e.t >= best_along) break;
+          const SourceView& n = sources[e.n];
+          const Imath::V3f& on = origin_in[e.n];
+          const Imath::V3f dn = n.from_center.direction(ray.direction);
+          const std::int32_t hit =
+              march_in(*n.view, on, dn, t_from, o.z, jitter, settings, max_steps);
+          if (hit < 0) continue;
+          // The ray's point nearest the hit vertex: where the hit is, which the frame must not
+          // see as empty space.
+          const float along = (n.view->vertex(hit_pixel(hit)) - on).dot(dn);
+          if (policy.nearest && !(along < best_along)) continue;
+          if (seen_past(own, n.to_center.point(on + along * dn))) {
+            was_refused = true;
+            continue;
+          }
+          best = &n;
+          best_hit = hit;
+          best_along = along;
+          if (!policy.nearest) break;
+        }
+        // A source's trace sample `hit` found for the ray: its light, its shares out of the
+        // miss model.
+        auto take = [&](const SourceView& n, std::int32_t hit) {
+          add_hit_light(*n.view->trace, n.view->light, hit, ray.weight, sample.light);
+          if (record_found) {
+            found_by_row[by].push_back({n.index, hit, ray.weight});
+            ++found_count[s];
+          }
+          sample.take_shares(self.misses, ray);
+        };
+        if (best) {
+          take(*best, best_hit);
+          ++row_found;
+          continue;
+        }
+        // Met nothing any view shows. Where a view shows the sky in its direction it reaches
+        // the sky; else it takes what lay behind it where it was last seen: a surface it was
+        // heading for, or the sky if it rises (falling, it meets the ground or something on
+        // it, which the miss model stands for).
+        if (policy.sky_and_last_seen && !was_refused) {
+          const bool sky_ahead = shows_sky(sources, ray.direction);
+          const LastSeen seen = sky_ahead
+                                    ? LastSeen()
+                                    : last_seen(sources, reach, o, ray.direction,
+                                                static_cast<float>(settings.max_distance), &spans);
+          if (sky_ahead ||
+              (seen.view && seen.sample < 0 && ray.direction.dot(self.misses.up()) > 0)) {
+            sample.take_shares(self.misses, ray);
+            self.misses.add_sky(ray.direction, ray.weight, sample.sky);
+            ++row_sky;
+            continue;
+          }
+          if (seen.view && seen.sample >= 0) {
+            take(*seen.view, seen.sample);
+            ++row_hidden;
+            continue;
+          }
+        }
+        if (was_refused) ++row_refused;
+        if (keep_missed) {
+          row_left[by].push_back(ray);
+          ++left_count[s];
+        }
+      }
+      sample.apply(s, policy.hold_shares_at_zero, &into);
+    }
     rays += row_rays;
     found += row_found;
     sky += row_sky;
@@ -666,33 +689,29 @@ bool continue_in_views(FrameTrace* self_trace, const std::vector<const FrameTrac
   r.sky = sky;
   r.hidden = hidden;
   r.refused = refused;
-  if (!keep_missed) {
-    self.missed = MissedRays();
-  } else {
+  if (keep_missed) {
     // The rays left, in trace-sample order.
-    MissedRays left;
-    left.origin = std::move(self.missed.origin);
+    out.left.origin = self.missed.origin;
     join_rows(
         grid, row_left,
         [&](int by, int bx) { return left_count[static_cast<std::size_t>(by) * grid.width + bx]; },
-        &left.begin, &left.rays);
-    self.missed = std::move(left);
+        &out.left.begin, &out.left.rays);
   }
-  if (found_rays)
+  if (record_found)
     join_rows(
         grid, found_by_row,
         [&](int by, int bx) { return found_count[static_cast<std::size_t>(by) * grid.width + bx]; },
-        &found_rays->begin, &found_rays->hits);
-  return r.found + r.sky + r.hidden > 0;
+        &out.found.begin, &out.found.hits);
+  return out;
 }
 
-Image view_light(const FrameTrace& self, const ViewHits& found,
-                 const std::vector<const FrameTrace*>& views,
-                 const std::vector<const Image*>& light, const GiSettings& settings) {
-  // Only the views' light tables: the hits are known.
-  std::vector<std::vector<std::array<float, 3>>> tables(views.size());
+Image source_light(const FrameTrace& self, const SourceHits& found,
+                   const std::vector<ContinuationSource>& sources, const GiSettings& settings) {
+  // Only the sources' light tables: the hits are known.
+  std::vector<std::vector<std::array<float, 3>>> tables(sources.size());
   if (settings.bounces > 1)
-    for (std::size_t i = 0; i < views.size(); ++i) tables[i] = hit_light(*views[i], *light[i]);
+    for (std::size_t i = 0; i < sources.size(); ++i)
+      tables[i] = hit_light(*sources[i].trace, *sources[i].light);
   const TraceGrid& grid = self.grid;
   Image out(grid.width, grid.height, 3);
   parallel_for_rows(grid.height, [&](int by) {
@@ -700,8 +719,8 @@ Image view_light(const FrameTrace& self, const ViewHits& found,
       const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
       float sum[3] = {0, 0, 0};
       for (std::uint32_t k = found.begin[s]; k < found.begin[s + 1]; ++k) {
-        const ViewHit& h = found.hits[k];
-        add_hit_light(*views[h.view], tables[h.view], h.hit, h.weight, sum);
+        const SourceHit& h = found.hits[k];
+        add_hit_light(*sources[h.source].trace, tables[h.source], h.hit, h.weight, sum);
       }
       for (int c = 0; c < 3; ++c) out.plane(c)[s] = sum[c];
     }
@@ -709,90 +728,26 @@ Image view_light(const FrameTrace& self, const ViewHits& found,
   return out;
 }
 
-bool continue_rays(const std::vector<const FrameTrace*>& frames,
-                   const std::vector<const Image*>& light, int center, const GiSettings& settings,
-                   Image* out, Image* coverage, Image* shares, ContinuationReport* report) {
+std::vector<ContinuationSource> window_sources(const std::vector<const FrameTrace*>& frames,
+                                               const std::vector<const Image*>& light, int center) {
   const FrameTrace& self = *frames[center];
-  ContinuationReport local;
-  ContinuationReport& r = report ? *report : local;
-  r = ContinuationReport();
-  // The neighbours nearest first (the earlier of two as near), cameras unlike the centre's.
   std::vector<int> order;
-  for (int i = 0; i < static_cast<int>(frames.size()); ++i)
-    if (i != center && frames[i]->camera.has_world_transform &&
-        !same_camera(frames[i]->camera, self.camera))
-      order.push_back(i);
+  if (self.camera.has_world_transform)
+    for (int i = 0; i < static_cast<int>(frames.size()); ++i)
+      if (i != center && frames[i]->camera.has_world_transform &&
+          !same_camera(frames[i]->camera, self.camera))
+        order.push_back(i);
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
     return std::abs(frames[a]->frame - self.frame) < std::abs(frames[b]->frame - self.frame);
   });
-  if (!self.camera.has_world_transform) order.clear();
-  for (int i : order) r.frames.push_back(frames[i]->frame);
-  if (order.empty() || self.missed.rays.empty()) return false;
-  std::vector<View> views;
-  views.reserve(order.size() + 1);
-  // The centre's own view only tells what it sees: its light is not read.
-  views.emplace_back(self, nullptr, false, false);
-  std::vector<Neighbour> neighbours;
-  for (int i : order) {
-    views.emplace_back(*frames[i], settings.bounces > 1 ? light[i] : nullptr, false, true);
-    neighbours.push_back({&views.back(), between(self.camera, frames[i]->camera),
-                          between(frames[i]->camera, self.camera)});
-  }
-  const View& own = views.front();
-  const TraceGrid& grid = self.grid;
-  Image miss = self.hits.miss, env = self.hits.env, cube = self.hits.cube;
-  // What the views found (continue_in_views) stays; the neighbours' light adds to it.
-  Image foreign = self.hits.foreign.empty() ? Image(grid.width, grid.height, 3) : self.hits.foreign;
-  std::atomic<std::size_t> rays{0}, found{0}, moving{0};
-  parallel_for_rows(grid.height, [&](int by) {
-    std::size_t row_rays = 0, row_found = 0, row_moving = 0;
-    // What the found rays no longer leave to the miss model: their shares of it, as the miss
-    // model gives them for their directions.
-    walk_missed_rays(
-        self, by, settings, true, &foreign, &env, &cube, &miss,
-        [&](std::size_t, const Imath::V3f& o, const MissedRay& ray, float jitter, float t_from,
-            Found* found_here) {
-          // The frame has seen the ray's way free up to where it leaves the frame or passes
-          // behind something; what lies beyond, the neighbours tell.
-          if (std::isinf(t_from)) return;  // free all the way to its vanishing point
-          ++row_rays;
-          bool refused = false;
-          for (const Neighbour& n : neighbours) {
-            const Imath::V3f on = n.from_center.point(o);
-            const std::int32_t hit = march_in(*n.view, on, n.from_center.direction(ray.direction),
-                                              t_from, o.z, jitter, settings, settings.max_steps);
-            if (hit < 0) continue;
-            const std::int32_t h = hit_pixel(hit);
-            // The ray's point nearest the hit vertex: where the hit is, which the centre must
-            // not see as empty space.
-            const Imath::V3f x = n.view->vertex(h);
-            const Imath::V3f dn = n.from_center.direction(ray.direction);
-            const float along = (x - on).dot(dn);
-            if (seen_past(own, n.to_center.point(on + along * dn))) {
-              refused = true;
-              continue;
-            }
-            add_hit_light(*n.view->trace, n.view->light, hit, ray.weight, found_here->light);
-            found_here->take_shares(self.misses, ray);
-            ++row_found;
-            refused = false;
-            break;
-          }
-          if (refused) ++row_moving;
-        });
-    rays += row_rays;
-    found += row_found;
-    moving += row_moving;
-  });
-  r.rays = rays;
-  r.found = found;
-  r.moving = moving;
-  if (r.found == 0) return false;  // nothing changes: no need to gather again
-  const ContinuedHits hits(self, std::move(miss), std::move(env), std::move(cube),
-                           std::move(foreign));
-  *out = gather_bounces(grid, hits, settings.bounces, self.misses, coverage);
-  if (shares) *shares = hits.cube();
-  return true;
+  std::vector<ContinuationSource> out;
+  for (int i : order) out.push_back({frames[i], light[i]});
+  return out;
+}
+
+Image gather_continued(const FrameTrace& self, const MissShares& shares, int bounces,
+                       Image* coverage) {
+  return gather_bounces(self.grid, HitsWithShares(self, shares), bounces, self.misses, coverage);
 }
 
 }  // namespace ssgi::detail
