@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -205,8 +206,10 @@ TEST(Pipeline, MultiframeFindsALitFaceOnlyANeighbourShows) {
   ASSERT_EQ(pipeline.plan().multiframe, s.temporal_radius);
   const detail::TracedLight ta = pipeline.trace_light(a), tb = pipeline.trace_light(b);
   for (float v : ta.light.data()) ASSERT_EQ(v, 0.0f);  // alone it sees no light
-  Image light, coverage;
-  ASSERT_TRUE(pipeline.continue_light(a, {&ta, &tb}, 0, &light, &coverage));
+  const std::optional<detail::ContinuedLight> continued = pipeline.continue_light(a, {&ta, &tb}, 0);
+  ASSERT_TRUE(continued);
+  const Image& light = continued->light;
+  const Image& coverage = continued->coverage;
 
   // The expected share, over a grid of cosine-weighted directions.
   const Camera& camera_b = b.camera;
@@ -256,8 +259,10 @@ TEST(Pipeline, MultiframeFindsALitFaceOnlyANeighbourShows) {
     const detail::FrameStages p(seq, framed);
     const detail::TracedLight fa = p.trace_light(a), fb = p.trace_light(b);
     ASSERT_EQ(fa.miss_shares.channels(), 3);
-    Image continued, continued_coverage, left;
-    ASSERT_TRUE(p.continue_light(a, {&fa, &fb}, 0, &continued, &continued_coverage, &left));
+    const std::optional<detail::ContinuedLight> framed_continued =
+        p.continue_light(a, {&fa, &fb}, 0);
+    ASSERT_TRUE(framed_continued);
+    const Image& left = framed_continued->miss_shares;
     ASSERT_EQ(left.channels(), 3);
     for (int g = 0; g < 3; ++g)
       for (std::size_t i = 0; i < left.plane_size(); ++i)
@@ -275,7 +280,7 @@ TEST(Pipeline, MultiframeFindsALitFaceOnlyANeighbourShows) {
   GBuffer still = b;
   still.frame = 1;
   const detail::TracedLight ts = pipeline.trace_light(still);
-  EXPECT_FALSE(pipeline.continue_light(still, {&ts, &tb}, 0, &light, &coverage));
+  EXPECT_FALSE(pipeline.continue_light(still, {&ts, &tb}, 0));
 }
 
 // A lit panel in front of a backdrop, over a floor: the backdrop sees the panel's unlit back,

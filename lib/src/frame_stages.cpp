@@ -106,67 +106,50 @@ Image held_at_zero(Image light) {
 
 }  // namespace
 
-Image FrameStages::trace(const GBuffer& g, GBuffer* grid_out, Image* coverage,
-                         std::shared_ptr<FrameTrace>* keep, CubeLight* cube, Image* shares,
-                         Image* reflected_out, const LitViews* views, std::string* misses_note,
-                         int kept_runs) const {
+std::shared_ptr<FrameTrace> FrameStages::trace(const GBuffer& g, int missed_runs,
+                                               std::string* misses_note) const {
   const GiSettings& s = settings_;
   TraceGrid grid =
       make_trace_grid(g, plan_.gather_emission, plan_.trace_scale, static_cast<float>(s.thickness));
-  const MissModel misses(g, s.miss, env_);
-  if (reflected_out) *reflected_out = grid.reflected;
+  MissModel misses(g, s.miss, env_);
   if (misses_note)
     *misses_note = misses.describe();
   else
     log_info("frame " + std::to_string(g.frame) + ": " + misses.describe());
-  if (grid_out) *grid_out = grid_gbuffer(g, grid);
+  auto t = std::make_shared<FrameTrace>(g.frame, g.camera, std::move(grid), WeightedHits(),
+                                        std::move(misses), MissedRays());
   switch (s.tracer) {
-    case Tracer::kReference: {
-      const ReferenceHits hits(g, s, misses, memory_.reference_hits_bytes);
-      Image light = gather_bounces(grid, hits, s.bounces, misses, coverage, cube);
-      if (shares) *shares = hits.cube();
-      return light;
-    }
-    case Tracer::kScreenSpace: {
+    case Tracer::kReference:
+      t->retraced =
+          std::make_shared<const ReferenceHits>(g, s, t->misses, memory_.reference_hits_bytes);
+      break;
+    case Tracer::kScreenSpace:
       // The march's rays are freed before the bounces.
-      WeightedHits hits = weighted_from_rays(grid, march_screen_space(g, s, misses));
-      Image light = gather_bounces(grid, hits, s.bounces, misses, coverage, cube);
-      if (shares) *shares = std::move(hits.cube);
-      return light;
-    }
+      t->hits = weighted_from_rays(t->grid, march_screen_space(g, s, t->misses));
+      break;
     case Tracer::kSlices:
+      t->hits = trace_slices(g, t->grid, s, t->misses, missed_runs > 0 ? &t->missed : nullptr,
+                             missed_runs);
       break;
   }
-  if (views && !views->empty()) {
-    MissedRays missed;
-    WeightedHits hits =
-        trace_slices(g, grid, s, misses, &missed, keep ? kept_runs : kViewRunsPerSlice);
-    auto t = std::make_shared<FrameTrace>(g.frame, g.camera, std::move(grid), std::move(hits),
-                                          misses, std::move(missed));
-    std::vector<ContinuationSource> sources;
-    for (std::size_t i = 0; i < views->traces.size(); ++i)
-      sources.push_back({views->traces[i].get(), &views->light[i]});
-    Continuation continued = continue_missed_rays(*t, take_shares(&t->hits), sources,
-                                                  views_policy(), s, keep != nullptr);
-    log_info(continued.report.describe(g.frame));
-    put_shares(std::move(continued.shares), &t->hits);
-    if (continued.walked) t->missed = std::move(continued.left);
-    Image light = gather_bounces(t->grid, t->hits, s.bounces, misses, coverage, cube);
-    if (shares) *shares = t->hits.cube;
-    if (keep) *keep = std::move(t);
-    return light;
-  }
-  MissedRays missed;
-  WeightedHits hits = trace_slices(g, grid, s, misses, keep ? &missed : nullptr, kept_runs);
-  Image light = gather_bounces(grid, hits, s.bounces, misses, coverage, cube);
-  if (!keep) {
-    if (shares) *shares = std::move(hits.cube);
-    return light;
-  }
-  if (shares) *shares = hits.cube;
-  *keep = std::make_shared<FrameTrace>(g.frame, g.camera, std::move(grid), std::move(hits), misses,
-                                       std::move(missed));
-  return light;
+  return t;
+}
+
+void FrameStages::continue_in_views(FrameTrace* t, const LitViews& views, bool keep_missed) const {
+  std::vector<ContinuationSource> sources;
+  for (std::size_t i = 0; i < views.traces.size(); ++i)
+    sources.push_back({views.traces[i].get(), &views.light[i]});
+  Continuation continued = continue_missed_rays(*t, take_shares(&t->hits), sources, views_policy(),
+                                                settings_, keep_missed);
+  log_info(continued.report.describe(t->frame));
+  put_shares(std::move(continued.shares), &t->hits);
+  if (continued.walked) t->missed = std::move(continued.left);
+}
+
+Image FrameStages::gather(const FrameTrace& t, Image* coverage, CubeLight* cube) const {
+  if (t.retraced)
+    return gather_bounces(t.grid, *t.retraced, settings_.bounces, t.misses, coverage, cube);
+  return gather_bounces(t.grid, t.hits, settings_.bounces, t.misses, coverage, cube);
 }
 
 Image FrameStages::denoise_on_grid(const GBuffer& g, Image light) const {
@@ -190,9 +173,9 @@ LitViews FrameStages::light_views(const std::vector<GBuffer>& views) const {
   out.light.resize(n);
   std::vector<std::string> notes(n);
   parallel_for_rows(static_cast<int>(n), [&](int i) {
-    out.light[i] =
-        denoise_on_grid(views[i], trace(views[i], nullptr, nullptr, &out.traces[i], nullptr,
-                                        nullptr, nullptr, nullptr, &notes[i], kViewRunsPerSlice));
+    // Its missed rays kept for the other views to continue.
+    out.traces[i] = trace(views[i], kViewRunsPerSlice, &notes[i]);
+    out.light[i] = denoise_on_grid(views[i], gather(*out.traces[i]));
   });
   for (std::size_t i = 0; i < n; ++i)
     log_info("frame " + std::to_string(views[i].frame) + ": view " + std::to_string(i + 1) + ": " +
@@ -221,10 +204,7 @@ LitViews FrameStages::light_views(const std::vector<GBuffer>& views) const {
       } else if (continued[i]) {
         t.hits.foreign = source_light(t, found[i], others, settings_);
       }
-      again[i] = continued[i]
-                     ? held_at_zero(denoise_on_grid(
-                           views[i], gather_bounces(t.grid, t.hits, settings_.bounces, t.misses)))
-                     : out.light[i];
+      again[i] = continued[i] ? held_at_zero(denoise_on_grid(views[i], gather(t))) : out.light[i];
     });
     out.light = std::move(again);
   }
@@ -235,11 +215,24 @@ TracedLight FrameStages::trace_light(const GBuffer& g, const LitViews* views) co
   TracedLight out;
   // The window levels the misses' colours over its frames (window_lights).
   const bool window = plan_.temporal == TemporalMode::kWindow;
+  const bool keep = plan_.multiframe > 0;
+  const bool with_views = views && !views->empty();
+  // The missed rays the window's other frames continue, or the views alone.
+  std::shared_ptr<FrameTrace> t = trace(g, keep         ? kMultiframeRunsPerSlice
+                                           : with_views ? kViewRunsPerSlice
+                                                        : 0);
+  if (with_views) continue_in_views(t.get(), *views, keep);
+  out.grid = grid_gbuffer(g, t->grid);
+  if (window) out.reflected = t->grid.reflected;
   CubeLight cube{};
+  out.light = gather(*t, &out.coverage, window ? &cube : nullptr);
   Image shares;
-  out.light = trace(g, &out.grid, &out.coverage, plan_.multiframe > 0 ? &out.trace : nullptr,
-                    window ? &cube : nullptr, window ? &shares : nullptr,
-                    window ? &out.reflected : nullptr, views);
+  if (window)
+    shares = t->retraced ? t->retraced->cube() : keep ? t->hits.cube : std::move(t->hits.cube);
+  // Kept for the window's continuations (this frame's own, and the others' in it); else its hits
+  // go before the denoiser's pyramid.
+  if (keep) out.trace = std::move(t);
+  t.reset();
   out.light = denoise_on_grid(g, std::move(out.light));
   if (shares.channels() != kCubeFaces) return out;
   // Each face's sum in pixel order, the faces in parallel.
@@ -289,20 +282,23 @@ Image FrameStages::indirect_light(const GBuffer& g, Image* coverage, const LitVi
   // there.
   const Plan& plan = plan_;
   const int level = pyramid_level(plan.trace_scale);
-  GBuffer grid;
-  Image light =
-      trace(g, coverage ? &grid : nullptr, coverage, nullptr, nullptr, nullptr, nullptr, views);
-  if (coverage) *coverage = finish_coverage(g, grid, *coverage);
+  const bool with_views = views && !views->empty();
+  std::shared_ptr<FrameTrace> t = trace(g, with_views ? kViewRunsPerSlice : 0);
+  if (with_views) continue_in_views(t.get(), *views, false);
+  Image light = gather(*t, coverage);
+  if (coverage)
+    *coverage = coverage_to_frame(*coverage, t->grid.depth, t->grid.normal, plan.trace_scale,
+                                  static_cast<float>(settings_.thickness), g.depth);
+  t.reset();  // the hits before the denoiser's pyramid
   if (level != 0 || plan.denoise)
     light = upsample_and_denoise(light, level, g.depth, g.normal, settings_.denoise_settings,
                                  plan.denoise);
-  if (views && !views->empty()) return held_at_zero(std::move(light));
+  if (with_views) return held_at_zero(std::move(light));
   return light;
 }
 
-bool FrameStages::continue_light(const GBuffer& g, const std::vector<const TracedLight*>& window,
-                                 int center, Image* light, Image* coverage,
-                                 Image* miss_shares) const {
+std::optional<ContinuedLight> FrameStages::continue_light(
+    const GBuffer& g, const std::vector<const TracedLight*>& window, int center) const {
   std::vector<const FrameTrace*> frames;
   std::vector<const Image*> lights;
   int c = -1;
@@ -312,19 +308,19 @@ bool FrameStages::continue_light(const GBuffer& g, const std::vector<const Trace
     frames.push_back(window[i]->trace.get());
     lights.push_back(&window[i]->light);
   }
-  if (c < 0) return false;
+  if (c < 0) return std::nullopt;
   const FrameTrace& self = *frames[c];
   const Continuation continued =
       continue_missed_rays(self, {self.hits.miss, self.hits.env, self.hits.cube, self.hits.foreign},
                            window_sources(frames, lights, c), frames_policy(), settings_);
   log_info(continued.report.describe(self.frame));
-  if (!continued.changed()) return false;  // nothing changes: no need to gather again
-  // Denoised as trace_light's.
-  *light =
-      denoise_on_grid(g, gather_continued(self, continued.shares, settings_.bounces, coverage));
-  if (miss_shares && continued.shares.cube.channels() == kCubeFaces)
-    *miss_shares = denoise_on_grid(g, grouped_shares(continued.shares.cube));
-  return true;
+  if (!continued.changed()) return std::nullopt;  // nothing changes: no need to gather again
+  ContinuedLight out;
+  out.light = denoise_on_grid(
+      g, gather_continued(self, continued.shares, settings_.bounces, &out.coverage));
+  if (plan_.temporal == TemporalMode::kWindow && continued.shares.cube.channels() == kCubeFaces)
+    out.miss_shares = denoise_on_grid(g, grouped_shares(continued.shares.cube));
+  return out;
 }
 
 std::string FrameStages::describe_misses(const GBuffer& g) const {

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -49,15 +50,14 @@ class FrameStages {
   // of it (TracedLight); with `views`, its missed rays continued in them first.
   TracedLight trace_light(const GBuffer& frame, const LitViews* views = nullptr) const;
 
-  // Plan::multiframe: TracedLight::light and ::coverage of window[center] (frame `frame`) with
-  // its missed rays continued in the other frames of `window` (TracedLight of each, ascending
-  // frame order, within Plan::multiframe frames of the centre). False, and nothing written,
-  // when none could be (gi/continuation.h); -v reports how many were and found a surface. With
-  // `miss_shares`, the shares of the misses left (as TracedLight::miss_shares: grouped,
-  // denoised as the light is).
-  bool continue_light(const GBuffer& frame, const std::vector<const TracedLight*>& window,
-                      int center, Image* light, Image* coverage,
-                      Image* miss_shares = nullptr) const;
+  // Plan::multiframe: the light of window[center] (frame `frame`) with its missed rays continued
+  // in the other frames of `window` (TracedLight of each, ascending frame order, within
+  // Plan::multiframe frames of the centre), gathered again and denoised as trace_light's;
+  // nothing when none found a surface (gi/continuation.h). -v reports how many were continued
+  // and found one.
+  std::optional<ContinuedLight> continue_light(const GBuffer& frame,
+                                               const std::vector<const TracedLight*>& window,
+                                               int center) const;
 
   // Light on the trace grid (temporally filtered or not) carried to the frame's resolution by
   // the denoiser's bilateral upsampling.
@@ -78,19 +78,19 @@ class FrameStages {
   FrameResult composite_in_place(GBuffer* frame, Image indirect, Image coverage = {}) const;
 
  private:
-  // Tracing, misses and bounces on the trace grid: the light before the denoiser, and, when
-  // `grid_out` is given, the grid as a G-buffer for the temporal stage, when `coverage` is, the
-  // coverage there (gather_bounces), when `keep` is (multiframe), what continuing rays needs.
-  // With `cube` and `shares`, the last bounce's cube colours and the samples' shares of them,
-  // with `reflected` the light the samples reflect.
-  // With `views` (not empty), the missed rays are continued in them before the bounces.
-  // What the miss model decided (-v) goes to the log, or with `misses_note` there. The missed
-  // rays kept are `kept_runs` per slice (continuation.h: kViewRunsPerSlice for a view's, which only
-  // the other views continue); those the views alone continue, kViewRunsPerSlice.
-  Image trace(const GBuffer& g, GBuffer* grid_out, Image* coverage,
-              std::shared_ptr<FrameTrace>* keep = nullptr, CubeLight* cube = nullptr,
-              Image* shares = nullptr, Image* reflected = nullptr, const LitViews* views = nullptr,
-              std::string* misses_note = nullptr, int kept_runs = kMultiframeRunsPerSlice) const;
+  // Tracing: frame g's trace grid, its miss model (what it decided goes to -v's log, or with
+  // `misses_note` there) and the tracer's hits; with the slice tracer and `missed_runs` > 0, its
+  // missed rays too, that many per slice (continuation.h), for views or other frames to continue.
+  std::shared_ptr<FrameTrace> trace(const GBuffer& g, int missed_runs,
+                                    std::string* misses_note = nullptr) const;
+
+  // The trace's missed rays continued in the frame's views, into its hits; with `keep_missed`,
+  // the rays still missed stay in it for the window's other frames to continue (else none).
+  void continue_in_views(FrameTrace* t, const LitViews& views, bool keep_missed) const;
+
+  // Gathering: the light on the trace grid after the plan's bounces over the trace's hits, before
+  // the denoiser; with `coverage` and `cube`, gather_bounces' coverage and last cube colours.
+  Image gather(const FrameTrace& t, Image* coverage = nullptr, CubeLight* cube = nullptr) const;
 
   // Traced light on the trace grid denoised there (the pyramid from the grid's level), when
   // the plan denoises: TracedLight::light.

@@ -48,7 +48,7 @@ struct Step {
   int output = -1;       // the index (in the frames asked for) of the frame these steps serve
   bool restart = false;  // EMA: the running average starts again at `read`
   bool finish = false;   // the frame `output` is finished (or reused) after this step
-  bool again = false;    // `read` (the frame `output`) decoded again to be finished, not lit
+  bool reread = false;   // `read` (the frame `output`) decoded again to be finished, not lit
 };
 
 // The temporal stage's shot: the frames on disk, cut at their gaps (find_frame_gaps) into parts
@@ -110,7 +110,11 @@ std::vector<Step> plan_steps(const SequenceInfo& seq, const ShotParts& parts, Te
             it = parts.in_window(*it, n, radius) ? std::next(it) : ring.erase(it);
           for (int f : disk)
             if (parts.in_window(f, n, radius) && ring.insert(f).second) steps.push_back({f, i});
-          if (read_twice) steps.push_back({n, i, false, false, true});
+          if (read_twice) {
+            Step again{n, i};
+            again.reread = true;
+            steps.push_back(again);
+          }
           break;
         case TemporalMode::kEma: {
           const int target = parts.index(n);
@@ -242,7 +246,7 @@ struct Decoded {
 };
 
 // What the lighting stage hands on: a frame finished (or reused, or failed), or nothing.
-struct Made {
+struct FinishedFrame {
   int output = -1;  // index in the frames asked for; -1: no frame finished at this step
   bool reused = false;
   std::shared_ptr<const GBuffer> g;
@@ -272,7 +276,7 @@ class Processor {
     if (stages_.plan().views) {
       std::vector<int> read;
       for (const Step& s : steps_)
-        if (s.read != kNoFrame && !s.again) read.push_back(s.read);
+        if (s.read != kNoFrame && !s.reread) read.push_back(s.read);
       check_views_cover(seq_, read);
     }
     for (int i = 0; i < static_cast<int>(seq_.frames.size()); ++i)
@@ -284,10 +288,10 @@ class Processor {
     std::exception_ptr failure;
     std::thread worker([&] {
       try {
-        pipeline_in_order<Decoded, Made>(
+        pipeline_in_order<Decoded, FinishedFrame>(
             static_cast<int>(steps_.size()), job_.in_flight, [&](int i) { return read(steps_[i]); },
-            [&](Decoded d) { return light(std::move(d)); }, [&](Made m) { write(std::move(m)); },
-            [&] { return !stopped_.load(); });
+            [&](Decoded d) { return light_and_finish(std::move(d)); },
+            [&](FinishedFrame m) { write(std::move(m)); }, [&] { return !stopped_.load(); });
       } catch (...) {
         failure = std::current_exception();
       }
@@ -321,7 +325,7 @@ class Processor {
     const Plan& plan = stages_.plan();
     RoleMask roles = plan.roles;
     bool report = true;
-    if (step.again) {
+    if (step.reread) {
       // Motion only served the trace grid.
       roles &= ~role_bit(Role::kMotion);
     } else if (read_twice_ && still_to_write(step.read, step.output)) {
@@ -333,7 +337,7 @@ class Processor {
     }
     try {
       d.frame = read_input_frame(seq_, step.read, roles, *job_.input, &stages_.color(), report);
-      if (plan.views && !step.again)
+      if (plan.views && !step.reread)
         d.frame->views = read_views(seq_, step.read, *job_.input, &stages_.color());
     } catch (const Error& e) {
       d.error = error_of(e);
@@ -344,7 +348,9 @@ class Processor {
     return d;
   }
 
-  Made light(Decoded d) {
+  // The lighting stage: the frame a step decoded lit for the temporal stage, then, at a step
+  // that finishes a frame, that frame finished.
+  FinishedFrame light_and_finish(Decoded d) {
     const Step& s = d.step;
     const int n = seq_.frames[s.output];
     const bool made = !job_.reuse[s.output];
@@ -355,7 +361,7 @@ class Processor {
         it = parts_.in_window(it->first, n, radius_) ? std::next(it) : ring_.erase(it);
     std::optional<InputFrame> own;        // frame n, when it is read at the step that finishes it
     std::optional<FrameError> own_error;  // why frame n could not be read again
-    if (s.again) {
+    if (s.reread) {
       if (d.error)
         own_error = d.error;
       else
@@ -363,7 +369,7 @@ class Processor {
     } else if (s.read != kNoFrame) {
       try {
         if (d.error) rethrow(*d.error);
-        own = take(s, std::move(*d.frame));
+        own = light_for_temporal(s, std::move(*d.frame));
         failed_.erase(s.read);
       } catch (const Error& e) {
         failed(s.read, error_of(e), n);
@@ -372,7 +378,7 @@ class Processor {
       }
     }
     times_[owner(s)].second += ms_since(start);
-    Made m;
+    FinishedFrame m;
     if (!s.finish) return m;
     m.output = s.output;
     m.reused = !made;
@@ -412,7 +418,7 @@ class Processor {
 
   // Lights a decoded frame at step `s`: into the ring (window) or the running average (EMA).
   // Returns it when the step finishes it and it is still needed whole.
-  std::optional<InputFrame> take(const Step& s, InputFrame frame) {
+  std::optional<InputFrame> light_for_temporal(const Step& s, InputFrame frame) {
     const int n = seq_.frames[s.output];
     if (mode_ == TemporalMode::kNone) return frame;
     const LitViews views = stages_.light_views(frame.views);
@@ -424,7 +430,7 @@ class Processor {
       if (s.read == n && s.finish) return frame;
       return std::nullopt;
     }
-    Lit lit{std::move(traced), nullptr, nullptr};
+    WindowFrame lit{std::move(traced), nullptr, nullptr};
     // Kept until the frame is written: its input's headers (the file it was lit from), and its
     // passes unless it is read again to be finished. Motion only served the trace grid, which
     // the ring holds.
@@ -452,12 +458,11 @@ class Processor {
 
   // Frame n's light filtered, finished and composited into *m. `own` is frame n as read at this
   // step, if it was.
-  void finish(int n, std::optional<InputFrame> own, Made* m) {
+  void finish(int n, std::optional<InputFrame> own, FinishedFrame* m) {
     if (const auto it = failed_.find(n); it != failed_.end()) rethrow(it->second);
     Image indirect, coverage;
     std::shared_ptr<GBuffer> g;
     if (mode_ == TemporalMode::kWindow) {
-      std::vector<const GBuffer*> frames;
       std::vector<const TracedLight*> lit_frames;  // the window's, as lit
       std::vector<const TracedLight*> traced;      // those multiframe reads
       int center = -1, traced_center = -1;
@@ -474,14 +479,13 @@ class Processor {
           throw Error(ErrorKind::kInternal, seq_.pattern.path_for(f),
                       "frame " + std::to_string(f) + " of the temporal window was not lit");
         if (f == n) {
-          center = static_cast<int>(frames.size());
+          center = static_cast<int>(lit_frames.size());
           traced_center = static_cast<int>(traced.size());
         }
-        frames.push_back(&it->second.traced.grid);
         lit_frames.push_back(&it->second.traced);
         if (std::abs(f - n) <= stages_.plan().multiframe) traced.push_back(&it->second.traced);
       }
-      Lit& lit = ring_.at(n);
+      WindowFrame& lit = ring_.at(n);
       if (read_twice_) {
         if (!own)
           throw Error(ErrorKind::kInternal, seq_.pattern.path_for(n),
@@ -491,21 +495,16 @@ class Processor {
         lit.g = std::make_shared<GBuffer>(std::move(own->g));
         lit.input = std::move(own->input);
       }
-      // Each frame's light with the misses' colours the window's mean, then filtered.
-      std::vector<MissColours> changes;
-      const std::vector<Image> levelled = level_window_misses(lit_frames, &changes);
-      std::vector<const Image*> light;
-      for (const Image& l : levelled) light.push_back(&l);
-      Image filtered = temporal_window(frames, light, center, radius_);
-      Image continued, continued_coverage, continued_shares;
-      const bool multiframe = stages_.plan().multiframe > 0 &&
-                              stages_.continue_light(*lit.g, traced, traced_center, &continued,
-                                                     &continued_coverage, &continued_shares);
-      if (multiframe)
-        add_continued_light(lit.traced, continued, continued_shares, changes[center], &filtered);
+      // The gi stage's last step for frame n, its rays continued in the window's frames; then
+      // the temporal stage over the window's light, with what that continuation changed.
+      const std::optional<ContinuedLight> continued =
+          stages_.plan().multiframe > 0 ? stages_.continue_light(*lit.g, traced, traced_center)
+                                        : std::nullopt;
+      const Image filtered =
+          filter_window(lit_frames, center, radius_, continued ? &*continued : nullptr);
       indirect = stages_.finish_light(*lit.g, filtered);
       coverage = stages_.finish_coverage(*lit.g, lit.traced.grid,
-                                         multiframe ? continued_coverage : lit.traced.coverage);
+                                         continued ? continued->coverage : lit.traced.coverage);
       // The frame's own hits and missed rays served its continuation alone.
       if (lit.traced.trace) lit.traced.trace->release_own();
       // From now on the frame is only a neighbour: reprojection reads its trace grid.
@@ -538,7 +537,7 @@ class Processor {
     if (seq_.context) cut_to(seq_.data_window, &m->g, m->result.get());
   }
 
-  void write(Made m) {
+  void write(FinishedFrame m) {
     if (m.output < 0 || stopped_) return;
     FrameReport fr;
     fr.frame = seq_.frames[m.output];
@@ -585,7 +584,7 @@ class Processor {
   }
 
   // A frame in the window's ring.
-  struct Lit {
+  struct WindowFrame {
     // Its trace grid (what reprojection reads), its own light and coverage there before
     // temporal filtering, and with multiframe what continuing rays reads.
     TracedLight traced;
@@ -605,7 +604,7 @@ class Processor {
   std::map<int, int> output_index_;  // frames to make -> their index in seq_.frames
 
   // The lighting stage's state.
-  std::map<int, Lit> ring_;
+  std::map<int, WindowFrame> ring_;
   std::map<int, FrameError> failed_;                // frames that could not be read or lit
   std::set<int> warned_;                            // of those, the ones warned about as neighbours
   std::map<int, std::pair<double, double>> times_;  // per frame: read_ms, gi_ms so far

@@ -18,6 +18,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -62,8 +63,8 @@ struct MissedRays {
   std::vector<Imath::V3f> origin;  // per trace sample, where its rays start (camera space)
 };
 
-// What a frame's trace keeps for continuing rays: its trace grid (what other traces' rays meet
-// there, and where its own start), its hits and misses, its missed rays and its camera.
+// A frame's trace: its trace grid (what other traces' rays meet there, and where its own start),
+// its hits and misses, its missed rays and its camera.
 struct FrameTrace {
   FrameTrace(int frame, const Camera& camera, TraceGrid grid, WeightedHits hits, MissModel misses,
              MissedRays missed);
@@ -73,6 +74,9 @@ struct FrameTrace {
   WeightedHits hits;
   MissModel misses;
   MissedRays missed;
+  // The reference tracer's hits, traced again for each bounce (reference.h; they need `misses`,
+  // so the trace stays where it is made): null for the tracers that hold theirs in `hits`.
+  std::shared_ptr<const HitSource> retraced;
   // Drops what only the frame's own continuation reads (its hits and missed rays), once it
   // is only a source of other frames'.
   void release_own();

@@ -634,4 +634,21 @@ void add_continued_light(const TracedLight& own, const Image& continued,
   }
 }
 
+Image filter_window(const std::vector<const TracedLight*>& window, int center, int radius,
+                    const ContinuedLight* continued) {
+  std::vector<MissColours> changes;
+  const std::vector<Image> levelled = level_window_misses(window, &changes);
+  std::vector<const GBuffer*> frames;
+  std::vector<const Image*> light;
+  for (std::size_t i = 0; i < window.size(); ++i) {
+    frames.push_back(&window[i]->grid);
+    light.push_back(&levelled[i]);
+  }
+  Image filtered = temporal_window(frames, light, center, radius);
+  if (continued)
+    add_continued_light(*window[center], continued->light, continued->miss_shares, changes[center],
+                        &filtered);
+  return filtered;
+}
+
 }  // namespace ssgi::detail

@@ -48,6 +48,21 @@ struct TracedLight {
 std::vector<Image> level_window_misses(const std::vector<const TracedLight*>& window,
                                        std::vector<MissColours>* changes = nullptr);
 
+// A frame's light on its trace grid with its missed rays continued in the window's other
+// frames (FrameStages::continue_light), denoised as TracedLight::light is.
+struct ContinuedLight {
+  Image light;        // 3 channels
+  Image coverage;     // as TracedLight::coverage, a continued ray that found a surface traced
+  Image miss_shares;  // as TracedLight::miss_shares, of the misses left; empty without a window
+};
+
+// The temporal stage of the symmetric window for window[center] (the window's frames as lit,
+// ascending frame order): each frame's light with the misses' colours levelled over the window
+// (level_window_misses), the window's filter over them (temporal_window, `radius`), and with
+// `continued`, what continuing the centre's rays changed in its light (add_continued_light).
+Image filter_window(const std::vector<const TracedLight*>& window, int center, int radius,
+                    const ContinuedLight* continued);
+
 // Adds to `filtered` (the window's result for `own`) what continuing own's missed rays in other
 // frames changed in its light: `continued` - own.light, less the levelling the rays that found
 // surfaces had had as misses (own.miss_shares - `continued_shares`, times `change`, its
