@@ -146,7 +146,9 @@ void FrameStages::continue_in_views(FrameTrace* t, const LitViews& views, bool k
   if (continued.walked) t->missed = std::move(continued.left);
 }
 
-Image FrameStages::gather(const FrameTrace& t, Image* coverage, CubeLight* cube) const {
+Image FrameStages::gather(const FrameTrace& t, Image* coverage, CubeLight* cube,
+                          const MissShares* shares) const {
+  if (shares) return gather_bounces(t.grid, t.hits, *shares, settings_.bounces, t.misses, coverage);
   if (t.retraced)
     return gather_bounces(t.grid, *t.retraced, settings_.bounces, t.misses, coverage, cube);
   return gather_bounces(t.grid, t.hits, settings_.bounces, t.misses, coverage, cube);
@@ -316,8 +318,7 @@ std::optional<ContinuedLight> FrameStages::continue_light(
   log_info(continued.report.describe(self.frame));
   if (!continued.changed()) return std::nullopt;  // nothing changes: no need to gather again
   ContinuedLight out;
-  out.light = denoise_on_grid(
-      g, gather_continued(self, continued.shares, settings_.bounces, &out.coverage));
+  out.light = denoise_on_grid(g, gather(self, &out.coverage, nullptr, &continued.shares));
   if (plan_.temporal == TemporalMode::kWindow && continued.shares.cube.channels() == kCubeFaces)
     out.miss_shares = denoise_on_grid(g, grouped_shares(continued.shares.cube));
   return out;

@@ -89,8 +89,10 @@ class FrameStages {
   void continue_in_views(FrameTrace* t, const LitViews& views, bool keep_missed) const;
 
   // Gathering: the light on the trace grid after the plan's bounces over the trace's hits, before
-  // the denoiser; with `coverage` and `cube`, gather_bounces' coverage and last cube colours.
-  Image gather(const FrameTrace& t, Image* coverage = nullptr, CubeLight* cube = nullptr) const;
+  // the denoiser; with `coverage` and `cube`, gather_bounces' coverage and last cube colours;
+  // with `shares`, those of a continuation in place of the hits' own (no cube colours then).
+  Image gather(const FrameTrace& t, Image* coverage = nullptr, CubeLight* cube = nullptr,
+               const MissShares* shares = nullptr) const;
 
   // Traced light on the trace grid denoised there (the pyramid from the grid's level), when
   // the plan denoises: TracedLight::light.

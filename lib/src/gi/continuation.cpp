@@ -407,24 +407,6 @@ bool seen_past(const View& center, const Imath::V3f& x) {
   return !std::isfinite(z);
 }
 
-// A frame's hits with a continuation's shares: the continued rays' light added, their miss
-// shares taken out.
-class HitsWithShares final : public HitSource {
- public:
-  HitsWithShares(const FrameTrace& t, const MissShares& shares)
-      : width_(t.grid.width), hits_(t.hits), shares_(shares) {}
-  HitRow row(int by, HitScratch*) const override { return hits_.row(by, width_); }
-  const Image& miss() const override { return shares_.miss; }
-  const Image& env() const override { return shares_.env; }
-  const Image& cube() const override { return shares_.cube; }
-  const Image* foreign() const override { return &shares_.foreign; }
-
- private:
-  int width_;
-  const WeightedHits& hits_;
-  const MissShares& shares_;
-};
-
 }  // namespace
 
 ContinuationPolicy views_policy() {
@@ -447,18 +429,6 @@ ContinuationPolicy frames_policy() {
   p.hold_shares_at_zero = true;
   p.sky_and_last_seen = false;
   return p;
-}
-
-MissShares take_shares(WeightedHits* hits) {
-  return {std::move(hits->miss), std::move(hits->env), std::move(hits->cube),
-          std::move(hits->foreign)};
-}
-
-void put_shares(MissShares shares, WeightedHits* hits) {
-  hits->miss = std::move(shares.miss);
-  hits->env = std::move(shares.env);
-  hits->cube = std::move(shares.cube);
-  hits->foreign = std::move(shares.foreign);
 }
 
 FrameTrace::FrameTrace(int f, const Camera& c, TraceGrid g, WeightedHits h, MissModel m,
@@ -743,11 +713,6 @@ std::vector<ContinuationSource> window_sources(const std::vector<const FrameTrac
   std::vector<ContinuationSource> out;
   for (int i : order) out.push_back({frames[i], light[i]});
   return out;
-}
-
-Image gather_continued(const FrameTrace& self, const MissShares& shares, int bounces,
-                       Image* coverage) {
-  return gather_bounces(self.grid, HitsWithShares(self, shares), bounces, self.misses, coverage);
 }
 
 }  // namespace ssgi::detail

@@ -122,16 +122,6 @@ struct ContinuationPolicy {
 ContinuationPolicy views_policy();
 ContinuationPolicy frames_policy();
 
-// What a frame's hits leave to the miss model, per trace sample, and the light continued rays
-// brought it (WeightedHits' fields of the same names).
-struct MissShares {
-  Image miss, env, cube;
-  Image foreign;  // 3 channels, or empty before any continuation
-};
-// The shares moved out of `hits`, and into it.
-MissShares take_shares(WeightedHits* hits);
-void put_shares(MissShares shares, WeightedHits* hits);
-
 // The continuation's numbers for one frame (-v).
 struct ContinuationReport {
   ContinuationPolicy::Kind kind = ContinuationPolicy::Kind::kViews;
@@ -190,11 +180,5 @@ Image source_light(const FrameTrace& self, const SourceHits& found,
 // as near), each with its light; none when the centre's camera has no world transform.
 std::vector<ContinuationSource> window_sources(const std::vector<const FrameTrace*>& frames,
                                                const std::vector<const Image*>& light, int center);
-
-// frames[center]'s light on its trace grid after `bounces` gathers over its hits with `shares`
-// (a continuation's); with `coverage`, gather_bounces' coverage, a continued ray that found a
-// surface counting as traced.
-Image gather_continued(const FrameTrace& self, const MissShares& shares, int bounces,
-                       Image* coverage);
 
 }  // namespace ssgi::detail

@@ -42,19 +42,22 @@ WeightedHits weighted_from_rays(const TraceGrid& grid, const RayHits& rays) {
 
 namespace {
 
-// WeightedHits as a HitSource.
+// WeightedHits' entries as a HitSource, with its own shares or others.
 class HeldHits final : public HitSource {
  public:
-  HeldHits(const TraceGrid& grid, const WeightedHits& hits) : width_(grid.width), hits_(hits) {}
+  HeldHits(const TraceGrid& grid, const WeightedHits& hits, const Image& miss, const Image& env,
+           const Image& cube, const Image& foreign)
+      : width_(grid.width), hits_(hits), miss_(miss), env_(env), cube_(cube), foreign_(foreign) {}
   HitRow row(int by, HitScratch*) const override { return hits_.row(by, width_); }
-  const Image& miss() const override { return hits_.miss; }
-  const Image& env() const override { return hits_.env; }
-  const Image& cube() const override { return hits_.cube; }
-  const Image* foreign() const override { return hits_.foreign.empty() ? nullptr : &hits_.foreign; }
+  const Image& miss() const override { return miss_; }
+  const Image& env() const override { return env_; }
+  const Image& cube() const override { return cube_; }
+  const Image* foreign() const override { return foreign_.empty() ? nullptr : &foreign_; }
 
  private:
   int width_;
   const WeightedHits& hits_;
+  const Image &miss_, &env_, &cube_, &foreign_;
 };
 
 // One gather: the light `radiance(hit)` of every hit, plus the misses' environment light and
@@ -122,7 +125,27 @@ void gather_once(const TraceGrid& grid, const HitSource& hits, const Radiance& r
 
 Image gather_bounces(const TraceGrid& grid, const WeightedHits& hits, int bounces,
                      const MissModel& misses, Image* coverage, CubeLight* last_cube) {
-  return gather_bounces(grid, HeldHits(grid, hits), bounces, misses, coverage, last_cube);
+  return gather_bounces(grid, HeldHits(grid, hits, hits.miss, hits.env, hits.cube, hits.foreign),
+                        bounces, misses, coverage, last_cube);
+}
+
+Image gather_bounces(const TraceGrid& grid, const WeightedHits& hits, const MissShares& shares,
+                     int bounces, const MissModel& misses, Image* coverage) {
+  return gather_bounces(grid,
+                        HeldHits(grid, hits, shares.miss, shares.env, shares.cube, shares.foreign),
+                        bounces, misses, coverage);
+}
+
+MissShares take_shares(WeightedHits* hits) {
+  return {std::move(hits->miss), std::move(hits->env), std::move(hits->cube),
+          std::move(hits->foreign)};
+}
+
+void put_shares(MissShares shares, WeightedHits* hits) {
+  hits->miss = std::move(shares.miss);
+  hits->env = std::move(shares.env);
+  hits->cube = std::move(shares.cube);
+  hits->foreign = std::move(shares.foreign);
 }
 
 Image coverage_to_frame(const Image& grid_coverage, const Image& grid_depth,

@@ -37,7 +37,8 @@ struct WeightedHits {
   Image env;   // 3 channels: environment light of those directions
   Image cube;  // kCubeFaces channels: their shares of the miss model's cube
   // 3 channels or absent: light that missed rays continued in the frame's views brought
-  // (continuation.h, continue_missed_rays), counted as traced; their shares are out of the three above.
+  // (continuation.h, continue_missed_rays), counted as traced; their shares are out of the three
+  // above.
   Image foreign;
   std::size_t entries() const { return pixel.size(); }
   // Row `by`'s hits, of a grid `width` samples across.
@@ -45,6 +46,16 @@ struct WeightedHits {
     return {begin.data() + static_cast<std::size_t>(by) * width, pixel.data(), weight.data()};
   }
 };
+
+// What a frame's hits leave to the miss model, per trace sample, and the light continued rays
+// brought it (WeightedHits' fields of the same names): what continuing rays changes.
+struct MissShares {
+  Image miss, env, cube;
+  Image foreign;  // 3 channels, or empty before any continuation
+};
+// The shares moved out of `hits`, and into it.
+MissShares take_shares(WeightedHits* hits);
+void put_shares(MissShares shares, WeightedHits* hits);
 
 // The march's or the reference's rays as weighted hits (scale 1): each ray 1/rays.
 WeightedHits weighted_from_rays(const TraceGrid& grid, const RayHits& rays);
@@ -89,6 +100,11 @@ Image gather_bounces(const TraceGrid& grid, const HitSource& hits, int bounces,
 Image gather_bounces(const TraceGrid& grid, const WeightedHits& hits, int bounces,
                      const MissModel& misses, Image* coverage = nullptr,
                      CubeLight* last_cube = nullptr);
+
+// The same over `hits`' entries with `shares` in place of its own (a continuation's,
+// continuation.h: the light its continued rays brought counted as traced).
+Image gather_bounces(const TraceGrid& grid, const WeightedHits& hits, const MissShares& shares,
+                     int bounces, const MissModel& misses, Image* coverage = nullptr);
 
 // gather_bounces' coverage (trace samples at `scale` pixels each, -1 without a surface) at the
 // resolution of `depth` (the frame's): averaged over each sample's 3 x 3 neighbours on its
