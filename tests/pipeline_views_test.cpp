@@ -397,15 +397,15 @@ TEST(Views, LaterPassesAmongViewsBringWhatTheFirstFound) {
     for (std::size_t j = 0; j < faces.size(); ++j)
       if (j != i) others.push_back({alone[j].traces[0].get(), &alone[j].light[0]});
     const detail::FrameTrace& t = *alone[i].traces[0];
-    const detail::Continuation continued =
-        detail::continue_missed_rays(t, {t.hits.miss, t.hits.env, t.hits.cube, t.hits.foreign},
-                                     others, detail::views_policy(), s, false, true);
+    const detail::Continuation continued = detail::continue_missed_rays(
+        t, {t.hits.miss, t.hits.env, t.hits.cube, t.hits.continued_light}, others,
+        detail::views_policy(), s, false, true);
     const detail::ContinuationReport& report = continued.report;
     const Image again = detail::source_light(t, continued.found, others, s);
     double first = 0, later = 0;
     for (int k = 0; k < 3; ++k)
       for (std::size_t p = 0; p < again.plane_size(); ++p) {
-        first += continued.shares.foreign.plane(k)[p];
+        first += continued.shares.continued_light.plane(k)[p];
         later += again.plane(k)[p];
       }
     std::printf("face %zu: %s; light %.4f, again %.4f\n", i, report.describe(1).c_str(), first,

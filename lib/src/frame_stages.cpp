@@ -204,7 +204,7 @@ LitViews FrameStages::light_views(const std::vector<GBuffer>& views) const {
         found[i] = std::move(c.found);
         continued[i] = c.changed();
       } else if (continued[i]) {
-        t.hits.foreign = source_light(t, found[i], others, settings_);
+        t.hits.continued_light = source_light(t, found[i], others, settings_);
       }
       again[i] = continued[i] ? held_at_zero(denoise_on_grid(views[i], gather(t))) : out.light[i];
     });
@@ -312,9 +312,9 @@ std::optional<ContinuedLight> FrameStages::continue_light(
   }
   if (c < 0) return std::nullopt;
   const FrameTrace& self = *frames[c];
-  const Continuation continued =
-      continue_missed_rays(self, {self.hits.miss, self.hits.env, self.hits.cube, self.hits.foreign},
-                           window_sources(frames, lights, c), frames_policy(), settings_);
+  const Continuation continued = continue_missed_rays(
+      self, {self.hits.miss, self.hits.env, self.hits.cube, self.hits.continued_light},
+      window_sources(frames, lights, c), frames_policy(), settings_);
   log_info(continued.report.describe(self.frame));
   if (!continued.changed()) return std::nullopt;  // nothing changes: no need to gather again
   ContinuedLight out;

@@ -136,8 +136,8 @@ struct ContinuedSample {
     miss += ray.weight;
   }
 
-  // Into sample s of `shares`: the light added to `foreign`, the shares taken out of env, cube
-  // and miss, the sky's light added to env (the environment's light, as the misses' is). The
+  // Into sample s of `shares`: the light added to `continued_light`, the shares taken out of env,
+  // cube and miss, the sky's light added to env (the environment's light, as the misses' is). The
   // tracer summed the shares over its bins of equal angle, and a ray's stand for its whole run
   // of sectors, so they are not exactly what is taken out (kViewRunsPerSlice): with
   // `hold_at_zero`, each share is held at zero, which biases the light up; else only the weight
@@ -146,7 +146,7 @@ struct ContinuedSample {
   void apply(std::size_t s, bool hold_at_zero, MissShares* shares) const {
     const float floor = hold_at_zero ? 0.0f : -std::numeric_limits<float>::infinity();
     for (int c = 0; c < 3; ++c) {
-      shares->foreign.plane(c)[s] += light[c];
+      shares->continued_light.plane(c)[s] += light[c];
       shares->env.plane(c)[s] = std::max(shares->env.plane(c)[s] - env[c], floor) + sky[c];
     }
     for (int f = 0; f < kCubeFaces; ++f)
@@ -512,7 +512,7 @@ Continuation continue_missed_rays(const FrameTrace& self, MissShares shares,
   const int max_steps = policy.every_pixel ? kEveryPixel : settings.max_steps;
   const TraceGrid& grid = self.grid;
   MissShares& into = out.shares;
-  if (into.foreign.empty()) into.foreign = Image(grid.width, grid.height, 3);
+  if (into.continued_light.empty()) into.continued_light = Image(grid.width, grid.height, 3);
   // The rays still missed, and the found rays, row by row.
   std::vector<std::vector<MissedRay>> row_left(keep_missed ? grid.height : 0);
   std::vector<std::uint32_t> left_count(keep_missed ? grid.origin.size() : 0, 0);

@@ -151,7 +151,7 @@ struct Continuation {
   // source's has no world transform, or the frame has no missed rays.
   bool walked = false;
   // The shares given, with the found rays' (and those reaching the sky) taken out, the light
-  // they brought added to `foreign`, the sky's light to `env`.
+  // they brought added to `continued_light`, the sky's light to `env`.
   MissShares shares;
   MissedRays left;   // with `keep_missed`: the rays still missed, for other sources to continue
   SourceHits found;  // with `record_found`: which source sample each found ray met
@@ -170,8 +170,8 @@ Continuation continue_missed_rays(const FrameTrace& self, MissShares shares,
                                   bool keep_missed = false, bool record_found = false);
 
 // The light the rays `found` (continue_missed_rays, on `self`'s trace grid) bring from the same
-// sources with their light now `light` (per source): what the continuation added to foreign,
-// for another pass of bounces among views.
+// sources with their light now `light` (per source): what the continuation added to
+// continued_light, for another pass of bounces among views.
 Image source_light(const FrameTrace& self, const SourceHits& found,
                    const std::vector<ContinuationSource>& sources, const GiSettings& settings);
 

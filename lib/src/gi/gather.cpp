@@ -46,18 +46,25 @@ namespace {
 class HeldHits final : public HitSource {
  public:
   HeldHits(const TraceGrid& grid, const WeightedHits& hits, const Image& miss, const Image& env,
-           const Image& cube, const Image& foreign)
-      : width_(grid.width), hits_(hits), miss_(miss), env_(env), cube_(cube), foreign_(foreign) {}
+           const Image& cube, const Image& continued_light)
+      : width_(grid.width),
+        hits_(hits),
+        miss_(miss),
+        env_(env),
+        cube_(cube),
+        continued_(continued_light) {}
   HitRow row(int by, HitScratch*) const override { return hits_.row(by, width_); }
   const Image& miss() const override { return miss_; }
   const Image& env() const override { return env_; }
   const Image& cube() const override { return cube_; }
-  const Image* foreign() const override { return foreign_.empty() ? nullptr : &foreign_; }
+  const Image* continued_light() const override {
+    return continued_.empty() ? nullptr : &continued_;
+  }
 
  private:
   int width_;
   const WeightedHits& hits_;
-  const Image &miss_, &env_, &cube_, &foreign_;
+  const Image &miss_, &env_, &cube_, &continued_;
 };
 
 // One gather: the light `radiance(hit)` of every hit, plus the misses' environment light and
@@ -74,7 +81,7 @@ void gather_once(const TraceGrid& grid, const HitSource& hits, const Radiance& r
     const HitRow row = hits.row(by, &scratch);
     const Image& env = hits.env();
     const Image& shares = hits.cube();
-    const Image* foreign = hits.foreign();
+    const Image* continued = hits.continued_light();
     for (int bx = 0; bx < grid.width; ++bx) {
       const std::size_t s = static_cast<std::size_t>(by) * grid.width + bx;
       if (grid.origin[s] < 0) continue;
@@ -88,10 +95,10 @@ void gather_once(const TraceGrid& grid, const HitSource& hits, const Radiance& r
       // The hits' light apart too, for the coverage (not sum - missed, which rounding could
       // take below 0 or above the total).
       float from_hits = 0;
-      if (foreign)
+      if (continued)
         for (int c = 0; c < 3; ++c) {
-          sum[c] += foreign->plane(c)[s];
-          from_hits += foreign->plane(c)[s];
+          sum[c] += continued->plane(c)[s];
+          from_hits += continued->plane(c)[s];
         }
       const std::uint32_t first = row.begin[bx], end = row.begin[bx + 1];
       // Two loops rather than one with the coverage's sum under a flag (a template flag and
@@ -125,27 +132,28 @@ void gather_once(const TraceGrid& grid, const HitSource& hits, const Radiance& r
 
 Image gather_bounces(const TraceGrid& grid, const WeightedHits& hits, int bounces,
                      const MissModel& misses, Image* coverage, CubeLight* last_cube) {
-  return gather_bounces(grid, HeldHits(grid, hits, hits.miss, hits.env, hits.cube, hits.foreign),
+  return gather_bounces(grid,
+                        HeldHits(grid, hits, hits.miss, hits.env, hits.cube, hits.continued_light),
                         bounces, misses, coverage, last_cube);
 }
 
 Image gather_bounces(const TraceGrid& grid, const WeightedHits& hits, const MissShares& shares,
                      int bounces, const MissModel& misses, Image* coverage) {
-  return gather_bounces(grid,
-                        HeldHits(grid, hits, shares.miss, shares.env, shares.cube, shares.foreign),
-                        bounces, misses, coverage);
+  return gather_bounces(
+      grid, HeldHits(grid, hits, shares.miss, shares.env, shares.cube, shares.continued_light),
+      bounces, misses, coverage);
 }
 
 MissShares take_shares(WeightedHits* hits) {
   return {std::move(hits->miss), std::move(hits->env), std::move(hits->cube),
-          std::move(hits->foreign)};
+          std::move(hits->continued_light)};
 }
 
 void put_shares(MissShares shares, WeightedHits* hits) {
   hits->miss = std::move(shares.miss);
   hits->env = std::move(shares.env);
   hits->cube = std::move(shares.cube);
-  hits->foreign = std::move(shares.foreign);
+  hits->continued_light = std::move(shares.continued_light);
 }
 
 Image coverage_to_frame(const Image& grid_coverage, const Image& grid_depth,

@@ -39,7 +39,7 @@ struct WeightedHits {
   // 3 channels or absent: light that missed rays continued in the frame's views brought
   // (continuation.h, continue_missed_rays), counted as traced; their shares are out of the three
   // above.
-  Image foreign;
+  Image continued_light;
   std::size_t entries() const { return pixel.size(); }
   // Row `by`'s hits, of a grid `width` samples across.
   HitRow row(int by, int width) const {
@@ -51,7 +51,7 @@ struct WeightedHits {
 // brought it (WeightedHits' fields of the same names): what continuing rays changes.
 struct MissShares {
   Image miss, env, cube;
-  Image foreign;  // 3 channels, or empty before any continuation
+  Image continued_light;  // 3 channels, or empty before any continuation
 };
 // The shares moved out of `hits`, and into it.
 MissShares take_shares(WeightedHits* hits);
@@ -81,7 +81,7 @@ class HitSource {
   virtual const Image& cube() const = 0;
   // Per trace sample, light that continued rays brought from other frames (3 channels,
   // continuation.h), the same in every bounce, counted as traced; null when there is none.
-  virtual const Image* foreign() const { return nullptr; }
+  virtual const Image* continued_light() const { return nullptr; }
 };
 
 // Indirect light at the trace grid after `bounces` gathers over `hits`: a hit brings its

@@ -16,9 +16,9 @@
 // this is the march's and the reference's answer on the same surface model.
 #pragma once
 
+#include "gi/continuation.h"
 #include "gi/gather.h"
 #include "gi/misses.h"
-#include "gi/continuation.h"
 #include "ssgi/gbuffer.h"
 #include "ssgi/settings.h"
 

@@ -116,9 +116,9 @@ class DepthMesh {
 
   // Also joins neighbours that lie on each other's tangent planes (each within kSmoothTolerance
   // of its depth of the other's), as the pixels of a plane seen at a grazing angle do although
-  // their depths differ by more than a slab. For views (continuation.h, continue_missed_rays), whose
-  // few pixels see much of the scene at such angles; `normal` is per pixel, (fx, fy, cx, cy) the
-  // camera in its pixels.
+  // their depths differ by more than a slab. For views (continuation.h, continue_missed_rays),
+  // whose few pixels see much of the scene at such angles; `normal` is per pixel, (fx, fy, cx, cy)
+  // the camera in its pixels.
   void join_tangent_neighbours(const Image& depth, const Image& normal, float fx, float fy,
                                float cx, float cy);
 
