@@ -143,24 +143,24 @@ TEST(Pipeline, TheWindowLevelsTheMissesOfFramesLitAlike) {
     ASSERT_EQ(pipeline.plan().temporal, TemporalMode::kWindow);
     {
       SCOPED_TRACE("lit alike, other borders");
-      expect_levelled({pipeline.trace_light(lit(1, 0.5f, 0.75f)),
-                       pipeline.trace_light(lit(2, 0.5f, 0.5f)),
-                       pipeline.trace_light(lit(3, 0.5f, 0.4f))});
+      expect_levelled({pipeline.grid_light(lit(1, 0.5f, 0.75f)),
+                       pipeline.grid_light(lit(2, 0.5f, 0.5f)),
+                       pipeline.grid_light(lit(3, 0.5f, 0.4f))});
     }
     {
       SCOPED_TRACE("lit alike, a lamp in the view");
       const std::vector<detail::TracedLight> t = {
-          pipeline.trace_light(lit(1, 0.5f, 0.75f)),
-          pipeline.trace_light(with_lamp(lit(2, 0.5f, 0.5f))),
-          pipeline.trace_light(lit(3, 0.5f, 0.4f))};
+          pipeline.grid_light(lit(1, 0.5f, 0.75f)),
+          pipeline.grid_light(with_lamp(lit(2, 0.5f, 0.5f))),
+          pipeline.grid_light(lit(3, 0.5f, 0.4f))};
       ASSERT_GT(mean_of(t[1].reflected), 2.0 * mean_of(t[0].reflected));
       expect_levelled(t);
     }
     {
       SCOPED_TRACE("lit otherwise");
-      const std::vector<detail::TracedLight> t = {pipeline.trace_light(lit(1, 0.2f, 0.2f)),
-                                                  pipeline.trace_light(lit(2, 0.5f, 0.5f)),
-                                                  pipeline.trace_light(lit(3, 1.1f, 1.1f))};
+      const std::vector<detail::TracedLight> t = {pipeline.grid_light(lit(1, 0.2f, 0.2f)),
+                                                  pipeline.grid_light(lit(2, 0.5f, 0.5f)),
+                                                  pipeline.grid_light(lit(3, 1.1f, 1.1f))};
       const std::vector<Image> levelled = detail::level_window_misses({&t[0], &t[1], &t[2]});
       for (int k = 0; k < 3; ++k) EXPECT_EQ(levelled[k].data(), t[k].light.data()) << k;
     }

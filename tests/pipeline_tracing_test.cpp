@@ -204,9 +204,10 @@ TEST(Pipeline, MultiframeFindsALitFaceOnlyANeighbourShows) {
   seq.frames = seq.frames_on_disk = {1, 2};
   const detail::FrameStages pipeline(seq, s);
   ASSERT_EQ(pipeline.plan().multiframe, s.temporal_radius);
-  const detail::TracedLight ta = pipeline.trace_light(a), tb = pipeline.trace_light(b);
+  const detail::TracedLight ta = pipeline.grid_light(a), tb = pipeline.grid_light(b);
   for (float v : ta.light.data()) ASSERT_EQ(v, 0.0f);  // alone it sees no light
-  const std::optional<detail::ContinuedLight> continued = pipeline.continue_light(a, {&ta, &tb}, 0);
+  const std::optional<detail::ContinuedLight> continued =
+      pipeline.continue_in_window(a, {&ta, &tb}, 0);
   ASSERT_TRUE(continued);
   const Image& light = continued->light;
   const Image& coverage = continued->coverage;
@@ -257,10 +258,10 @@ TEST(Pipeline, MultiframeFindsALitFaceOnlyANeighbourShows) {
     GiSettings framed = s;
     framed.miss = MissMode::kFrame;
     const detail::FrameStages p(seq, framed);
-    const detail::TracedLight fa = p.trace_light(a), fb = p.trace_light(b);
+    const detail::TracedLight fa = p.grid_light(a), fb = p.grid_light(b);
     ASSERT_EQ(fa.miss_shares.channels(), 3);
     const std::optional<detail::ContinuedLight> framed_continued =
-        p.continue_light(a, {&fa, &fb}, 0);
+        p.continue_in_window(a, {&fa, &fb}, 0);
     ASSERT_TRUE(framed_continued);
     const Image& left = framed_continued->miss_shares;
     ASSERT_EQ(left.channels(), 3);
@@ -279,8 +280,8 @@ TEST(Pipeline, MultiframeFindsALitFaceOnlyANeighbourShows) {
   // A neighbour with the frame's own camera adds nothing.
   GBuffer still = b;
   still.frame = 1;
-  const detail::TracedLight ts = pipeline.trace_light(still);
-  EXPECT_FALSE(pipeline.continue_light(still, {&ts, &tb}, 0));
+  const detail::TracedLight ts = pipeline.grid_light(still);
+  EXPECT_FALSE(pipeline.continue_in_window(still, {&ts, &tb}, 0));
 }
 
 // A lit panel in front of a backdrop, over a floor: the backdrop sees the panel's unlit back,

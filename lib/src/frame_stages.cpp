@@ -1,5 +1,5 @@
-// One frame's stages: tracing with its misses and bounces, denoising on the trace grid, rays
-// continued in other frames, the light carried to the frame's resolution, the composite.
+// One frame's stages: trace, continue in views, gather, denoise on the trace grid; continue in
+// the window's frames; carry the light to the frame's resolution; composite.
 #include "frame_stages.h"
 
 #include <algorithm>
@@ -213,7 +213,7 @@ LitViews FrameStages::light_views(const std::vector<GBuffer>& views) const {
   return out;
 }
 
-TracedLight FrameStages::trace_light(const GBuffer& g, const LitViews* views) const {
+TracedLight FrameStages::grid_light(const GBuffer& g, const LitViews* views) const {
   TracedLight out;
   // The window levels the misses' colours over its frames (window_lights).
   const bool window = plan_.temporal == TemporalMode::kWindow;
@@ -262,16 +262,16 @@ TracedLight FrameStages::trace_light(const GBuffer& g, const LitViews* views) co
   return out;
 }
 
-Image FrameStages::finish_coverage(const GBuffer& g, const GBuffer& grid,
-                                   const Image& grid_coverage) const {
+Image FrameStages::coverage_at_frame(const GBuffer& g, const GBuffer& grid,
+                                     const Image& grid_coverage) const {
   return coverage_to_frame(grid_coverage, grid.depth, grid.normal, plan_.trace_scale,
                            static_cast<float>(settings_.thickness), g.depth);
 }
 
-Image FrameStages::finish_light(const GBuffer& g, const Image& grid_light) const {
+Image FrameStages::light_at_frame(const GBuffer& g, const Image& on_grid) const {
   const int level = pyramid_level(plan_.trace_scale);
-  Image light = level == 0 ? grid_light
-                           : upsample_and_denoise(grid_light, level, g.depth, g.normal,
+  Image light = level == 0 ? on_grid
+                           : upsample_and_denoise(on_grid, level, g.depth, g.normal,
                                                   settings_.denoise_settings, false);
   if (plan_.views) return held_at_zero(std::move(light));
   return light;
@@ -279,7 +279,7 @@ Image FrameStages::finish_light(const GBuffer& g, const Image& grid_light) const
 
 Image FrameStages::indirect_light(const GBuffer& g, Image* coverage, const LitViews* views) const {
   // Without a temporal stage in between, one pass of the pyramid filters and upsamples (its
-  // guides are built once): finish_light(trace_light(g)) but for the 1e-3 own-value fallback
+  // guides are built once): light_at_frame(grid_light(g)) but for the 1e-3 own-value fallback
   // of pixels no coarse sample resembles, which takes the traced light here, the filtered one
   // there.
   const Plan& plan = plan_;
@@ -299,7 +299,7 @@ Image FrameStages::indirect_light(const GBuffer& g, Image* coverage, const LitVi
   return light;
 }
 
-std::optional<ContinuedLight> FrameStages::continue_light(
+std::optional<ContinuedLight> FrameStages::continue_in_window(
     const GBuffer& g, const std::vector<const TracedLight*>& window, int center) const {
   std::vector<const FrameTrace*> frames;
   std::vector<const Image*> lights;

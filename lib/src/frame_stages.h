@@ -1,6 +1,12 @@
-// One frame's stages, as the sequence processor drives them around the temporal stage: tracing
-// with its misses and bounces, denoising on the trace grid, rays continued in other frames, the
-// light carried to the frame's resolution, the composite. ssgi::Pipeline is their public face.
+// One frame's stages, each taking its inputs and returning its result, in the order a frame goes
+// through them: trace (the trace grid, the miss model, the tracer's hits), continue in the
+// frame's views, gather the bounces, denoise on the trace grid (grid_light); with --multiframe,
+// once the window's frames are lit, continue in them and gather what they found
+// (continue_in_window); after the temporal stage, the light and its coverage carried to the
+// frame's resolution (light_at_frame, coverage_at_frame) and the composite. Without a temporal
+// stage, indirect_light goes from trace to the frame's resolution in one pass of the pyramid.
+// The sequence processor drives them around the temporal stage; ssgi::Pipeline is their public
+// face.
 #pragma once
 
 #include <memory>
@@ -48,25 +54,25 @@ class FrameStages {
 
   // The frame's light traced and denoised on the trace grid, with what the temporal stage needs
   // of it (TracedLight); with `views`, its missed rays continued in them first.
-  TracedLight trace_light(const GBuffer& frame, const LitViews* views = nullptr) const;
+  TracedLight grid_light(const GBuffer& frame, const LitViews* views = nullptr) const;
 
   // Plan::multiframe: the light of window[center] (frame `frame`) with its missed rays continued
   // in the other frames of `window` (TracedLight of each, ascending frame order, within
-  // Plan::multiframe frames of the centre), gathered again and denoised as trace_light's;
+  // Plan::multiframe frames of the centre), gathered again and denoised as grid_light's;
   // nothing when none found a surface (gi/continuation.h). -v reports how many were continued
   // and found one.
-  std::optional<ContinuedLight> continue_light(const GBuffer& frame,
-                                               const std::vector<const TracedLight*>& window,
-                                               int center) const;
+  std::optional<ContinuedLight> continue_in_window(const GBuffer& frame,
+                                                   const std::vector<const TracedLight*>& window,
+                                                   int center) const;
 
   // Light on the trace grid (temporally filtered or not) carried to the frame's resolution by
   // the denoiser's bilateral upsampling.
-  Image finish_light(const GBuffer& frame, const Image& grid_light) const;
+  Image light_at_frame(const GBuffer& frame, const Image& on_grid) const;
 
   // TracedLight::coverage at the frame's resolution (1 channel): smoothed over neighbouring
   // trace samples on one surface and interpolated between them; `grid` is TracedLight::grid.
-  Image finish_coverage(const GBuffer& frame, const GBuffer& grid,
-                        const Image& grid_coverage) const;
+  Image coverage_at_frame(const GBuffer& frame, const GBuffer& grid,
+                          const Image& grid_coverage) const;
 
   // Pipeline::indirect_light, Pipeline::describe_misses and Pipeline::composite.
   Image indirect_light(const GBuffer& frame, Image* coverage = nullptr,

@@ -423,7 +423,7 @@ class Processor {
     if (mode_ == TemporalMode::kNone) return frame;
     const LitViews views = stages_.light_views(frame.views);
     frame.views.clear();
-    TracedLight traced = stages_.trace_light(frame.g, &views);
+    TracedLight traced = stages_.grid_light(frame.g, &views);
     if (mode_ == TemporalMode::kEma) {
       if (s.restart) ema_valid_ = false;
       ema_step(parts_.index(s.read), std::move(traced));
@@ -498,13 +498,13 @@ class Processor {
       // The gi stage's last step for frame n, its rays continued in the window's frames; then
       // the temporal stage over the window's light, with what that continuation changed.
       const std::optional<ContinuedLight> continued =
-          stages_.plan().multiframe > 0 ? stages_.continue_light(*lit.g, traced, traced_center)
+          stages_.plan().multiframe > 0 ? stages_.continue_in_window(*lit.g, traced, traced_center)
                                         : std::nullopt;
       const Image filtered =
           filter_window(lit_frames, center, radius_, continued ? &*continued : nullptr);
-      indirect = stages_.finish_light(*lit.g, filtered);
-      coverage = stages_.finish_coverage(*lit.g, lit.traced.grid,
-                                         continued ? continued->coverage : lit.traced.coverage);
+      indirect = stages_.light_at_frame(*lit.g, filtered);
+      coverage = stages_.coverage_at_frame(*lit.g, lit.traced.grid,
+                                           continued ? continued->coverage : lit.traced.coverage);
       // The frame's own hits and missed rays served its continuation alone.
       if (lit.traced.trace) lit.traced.trace->release_own();
       // From now on the frame is only a neighbour: reprojection reads its trace grid.
@@ -520,8 +520,8 @@ class Processor {
       own->views.clear();
       g = std::make_shared<GBuffer>(std::move(own->g));
       if (mode_ == TemporalMode::kEma) {
-        indirect = stages_.finish_light(*g, ema_out_);
-        coverage = stages_.finish_coverage(*g, ema_grid_, ema_coverage_);
+        indirect = stages_.light_at_frame(*g, ema_out_);
+        coverage = stages_.coverage_at_frame(*g, ema_grid_, ema_coverage_);
       } else {
         indirect = stages_.indirect_light(*g, &coverage, &views);
       }

@@ -49,7 +49,7 @@ std::vector<Image> level_window_misses(const std::vector<const TracedLight*>& wi
                                        std::vector<MissColours>* changes = nullptr);
 
 // A frame's light on its trace grid with its missed rays continued in the window's other
-// frames (FrameStages::continue_light), denoised as TracedLight::light is.
+// frames (FrameStages::continue_in_window), denoised as TracedLight::light is.
 struct ContinuedLight {
   Image light;        // 3 channels
   Image coverage;     // as TracedLight::coverage, a continued ray that found a surface traced
