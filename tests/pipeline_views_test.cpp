@@ -399,7 +399,7 @@ TEST(Views, LaterPassesAmongViewsBringWhatTheFirstFound) {
     const detail::FrameTrace& t = *alone[i].traces[0];
     const detail::Continuation continued = detail::continue_missed_rays(
         t, {t.hits.miss, t.hits.env, t.hits.cube, t.hits.continued_light}, others,
-        detail::views_policy(), s, false, true);
+        detail::continuation_policy(detail::ContinuationPolicy::Kind::kViews), s, false, true);
     const detail::ContinuationReport& report = continued.report;
     const Image again = detail::source_light(t, continued.found, others, s);
     double first = 0, later = 0;

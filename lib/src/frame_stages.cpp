@@ -139,8 +139,9 @@ void FrameStages::continue_in_views(FrameTrace* t, const LitViews& views, bool k
   std::vector<ContinuationSource> sources;
   for (std::size_t i = 0; i < views.traces.size(); ++i)
     sources.push_back({views.traces[i].get(), &views.light[i]});
-  Continuation continued = continue_missed_rays(*t, take_shares(&t->hits), sources, views_policy(),
-                                                settings_, keep_missed);
+  Continuation continued = continue_missed_rays(
+      *t, take_shares(&t->hits), sources, continuation_policy(ContinuationPolicy::Kind::kViews),
+      settings_, keep_missed);
   log_info(continued.report.describe(t->frame));
   put_shares(std::move(continued.shares), &t->hits);
   if (continued.walked) t->missed = std::move(continued.left);
@@ -197,7 +198,8 @@ LitViews FrameStages::light_views(const std::vector<GBuffer>& views) const {
           others.push_back({out.traces[j].get(), &out.light[j]});
       FrameTrace& t = *out.traces[i];
       if (pass == 0) {
-        Continuation c = continue_missed_rays(t, take_shares(&t.hits), others, views_policy(),
+        Continuation c = continue_missed_rays(t, take_shares(&t.hits), others,
+                                              continuation_policy(ContinuationPolicy::Kind::kViews),
                                               settings_, false, true);
         put_shares(std::move(c.shares), &t.hits);
         if (c.walked) t.missed = MissedRays();
@@ -314,7 +316,8 @@ std::optional<ContinuedLight> FrameStages::continue_in_window(
   const FrameTrace& self = *frames[c];
   const Continuation continued = continue_missed_rays(
       self, {self.hits.miss, self.hits.env, self.hits.cube, self.hits.continued_light},
-      window_sources(frames, lights, c), frames_policy(), settings_);
+      window_sources(frames, lights, c), continuation_policy(ContinuationPolicy::Kind::kFrames),
+      settings_);
   log_info(continued.report.describe(self.frame));
   if (!continued.changed()) return std::nullopt;  // nothing changes: no need to gather again
   ContinuedLight out;

@@ -409,25 +409,12 @@ bool seen_past(const View& center, const Imath::V3f& x) {
 
 }  // namespace
 
-ContinuationPolicy views_policy() {
+ContinuationPolicy continuation_policy(ContinuationPolicy::Kind kind) {
+  const bool views = kind == ContinuationPolicy::Kind::kViews;
   ContinuationPolicy p;
-  p.kind = ContinuationPolicy::Kind::kViews;
-  p.nearest = true;
-  p.every_pixel = true;
-  p.join_grazing = true;
-  p.hold_shares_at_zero = false;
-  p.sky_and_last_seen = true;
-  return p;
-}
-
-ContinuationPolicy frames_policy() {
-  ContinuationPolicy p;
-  p.kind = ContinuationPolicy::Kind::kFrames;
-  p.nearest = false;
-  p.every_pixel = false;
-  p.join_grazing = false;
-  p.hold_shares_at_zero = true;
-  p.sky_and_last_seen = false;
+  p.kind = kind;
+  p.nearest = p.every_pixel = p.join_grazing = p.sky_and_last_seen = views;
+  p.hold_shares_at_zero = !views;
   return p;
 }
 

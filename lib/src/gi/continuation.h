@@ -119,8 +119,8 @@ struct ContinuationPolicy {
   // The window's frames see what the frame sees, and tell nothing of where a ray ends unseen.
   bool sky_and_last_seen;
 };
-ContinuationPolicy views_policy();
-ContinuationPolicy frames_policy();
+// The policy of a kind of source: each choice follows from what the sources show.
+ContinuationPolicy continuation_policy(ContinuationPolicy::Kind kind);
 
 // The continuation's numbers for one frame (-v).
 struct ContinuationReport {
