@@ -18,7 +18,7 @@ import sys
 # A unit may include units of its own rank or below. Ranks of the units at lib/src's root are
 # given one by one; a folder's units share the folder's rank.
 WINGS = {
-    "parallel": 0, "image": 0, "log": 0, "settings": 0, "version": 0,
+    "parallel": 0, "buffers": 0, "image": 0, "log": 0, "settings": 0, "version": 0,
     "io": 1,
     "gi": 2,
     "compare": 3, "reference": 3,

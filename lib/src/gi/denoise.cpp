@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "buffers.h"
 #include "gi/denoise_kernels.h"
 #include "parallel.h"
 #include "ssgi/error.h"

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <vector>
 
+#include "buffers.h"
 #include "gi/trace_grid.h"
 #include "parallel.h"
 

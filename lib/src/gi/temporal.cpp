@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "buffers.h"
 #include "parallel.h"
 #include "ssgi/error.h"
 

@@ -11,6 +11,7 @@
 #include <memory>
 #include <set>
 
+#include "buffers.h"
 #include "io/input_frame.h"
 #include "io/oiio_files.h"
 #include "ssgi/error.h"

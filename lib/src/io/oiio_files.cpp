@@ -8,6 +8,7 @@
 #include <limits>
 #include <numeric>
 
+#include "buffers.h"
 #include "ssgi/error.h"
 
 namespace ssgi::detail {
