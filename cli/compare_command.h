@@ -7,7 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "ssgi/compare.h"
+#include "compare/compare.h"
+#include "compare/compare_files.h"
 #include "ssgi/error.h"
 
 namespace ssgi_cli {

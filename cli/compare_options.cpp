@@ -12,8 +12,7 @@
 #include <vector>
 
 #include "compare_command.h"
-#include "ssgi/compare.h"
-#include "ssgi/error.h"
+#include "throw.h"
 
 namespace ssgi_cli {
 namespace {

@@ -5,7 +5,8 @@
 #include <cstring>
 #include <sstream>
 
-#include "ssgi/error.h"
+#include "settings.h"
+#include "throw.h"
 
 namespace ssgi_cli {
 namespace {

@@ -11,11 +11,12 @@
 #include <vector>
 
 #include "fast_malloc.h"
+#include "io/frame_writer.h"
+#include "log.h"
 #include "memory.h"
+#include "settings.h"
 #include "simd.h"
-#include "ssgi/error.h"
-#include "ssgi/io.h"
-#include "ssgi/log.h"
+#include "throw.h"
 
 namespace ssgi_cli {
 namespace {

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "option_table.h"
+#include "settings.h"
 #include "ssgi/run.h"
 
 namespace ssgi_cli {

@@ -1,6 +1,6 @@
 // Tests of `ssgi compare`: metrics against values worked out by hand on tiny images, idiff's
 // threshold rules, channel selection by name, and the CLI's exit codes on small EXRs.
-#include "ssgi/compare.h"
+#include "compare/compare.h"
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "compare/compare_files.h"
 #include "ssgi/error.h"
 
 namespace ssgi {

@@ -1,13 +1,13 @@
 // ssgi's error metrics between planar float images: RMSE, relRMSE, relMSE, PSNR, SSIM over
 // the foreground pixels of each layer.
-#include "ssgi/compare.h"
+#include "compare/compare.h"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
 
-#include "ssgi/error.h"
+#include "throw.h"
 
 namespace ssgi {
 namespace {
@@ -196,18 +196,6 @@ std::vector<Metric> parse_metric_list(const std::string& list) {
   }
   if (!any) throw_usage("empty metric list");
   return metrics;
-}
-
-const char* status_name(CompareStatus status) {
-  switch (status) {
-    case CompareStatus::kOk:
-      return "ok";
-    case CompareStatus::kWarn:
-      return "warn";
-    case CompareStatus::kFail:
-      return "fail";
-  }
-  return "?";
 }
 
 std::vector<std::uint8_t> background_from_depth(const float* depth, std::size_t pixels) {

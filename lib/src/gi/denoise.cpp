@@ -21,7 +21,7 @@
 #include "buffers.h"
 #include "gi/denoise_kernels.h"
 #include "parallel.h"
-#include "ssgi/error.h"
+#include "throw.h"
 
 namespace ssgi::detail {
 namespace {

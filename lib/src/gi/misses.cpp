@@ -8,6 +8,7 @@
 
 #include "buffers.h"
 #include "gi/trace_grid.h"
+#include "io/camera.h"
 #include "parallel.h"
 
 namespace ssgi::detail {

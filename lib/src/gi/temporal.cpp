@@ -15,8 +15,9 @@
 #include <vector>
 
 #include "buffers.h"
+#include "io/camera.h"
 #include "parallel.h"
-#include "ssgi/error.h"
+#include "throw.h"
 
 namespace ssgi::detail {
 namespace {

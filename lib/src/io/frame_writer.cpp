@@ -1,4 +1,6 @@
 // Writing result frames: our layers plus the input's channels and header, atomically.
+#include "io/frame_writer.h"
+
 #include <Imath/half.h>
 #include <OpenImageIO/imageio.h>
 #include <unistd.h>
@@ -14,9 +16,8 @@
 #include "buffers.h"
 #include "io/input_frame.h"
 #include "io/oiio_files.h"
-#include "ssgi/error.h"
-#include "ssgi/io.h"
-#include "ssgi/log.h"
+#include "log.h"
+#include "throw.h"
 
 namespace ssgi {
 namespace {

@@ -9,7 +9,7 @@
 #include <numeric>
 
 #include "buffers.h"
-#include "ssgi/error.h"
+#include "throw.h"
 
 namespace ssgi::detail {
 
