@@ -17,7 +17,7 @@
 #include "io/views.h"
 #include "log.h"
 #include "memory_plan.h"
-#include "run_options.h"
+#include "options/run_options.h"
 #include "plan.h"
 #include "settings.h"
 #include "simd.h"

@@ -18,7 +18,7 @@
 #include "io/color.h"
 #include "io/frame_reader.h"
 #include "log.h"
-#include "run_options.h"
+#include "options/run_options.h"
 #include "ssgi/run.h"
 #include "ssgi/threads.h"
 #include "throw.h"

@@ -4,7 +4,7 @@
 #include <string>
 
 #include "commands.h"
-#include "run_options.h"
+#include "options/run_options.h"
 #include "progress.h"
 #include "ssgi/error.h"
 

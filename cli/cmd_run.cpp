@@ -2,7 +2,7 @@
 #include <cstdio>
 
 #include "commands.h"
-#include "run_options.h"
+#include "options/run_options.h"
 #include "progress.h"
 #include "ssgi/error.h"
 

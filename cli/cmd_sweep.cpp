@@ -15,7 +15,7 @@
 #include "compare/compare.h"
 #include "io/frame_reader.h"
 #include "io/temporary_files.h"
-#include "run_options.h"
+#include "options/run_options.h"
 #include "settings.h"
 #include "ssgi/compare.h"
 #include "ssgi/log.h"

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "compare/compare_files.h"
+#include "options/compare_options.h"
 #include "ssgi/error.h"
 
 namespace ssgi {
@@ -319,11 +320,11 @@ TEST(CompareSummary, MeanWorstAndWorstFrame) {
 }
 
 TEST(CompareMetricList, ParsesNamesAndAll) {
-  EXPECT_EQ(parse_metric_list("psnr,rmse,psnr"),
+  EXPECT_EQ(ssgi_cli::parse_metric_list("psnr,rmse,psnr"),
             (std::vector<Metric>{Metric::kPsnr, Metric::kRmse}));
-  EXPECT_EQ(parse_metric_list("all").size(), 5u);
+  EXPECT_EQ(ssgi_cli::parse_metric_list("all").size(), 5u);
   try {
-    parse_metric_list("rmse,flip");
+    ssgi_cli::parse_metric_list("rmse,flip");
     FAIL() << "no throw";
   } catch (const Error& e) {
     EXPECT_EQ(e.kind(), ErrorKind::kUsage);

@@ -7,7 +7,7 @@ is a unit of its own when none does (types only). Fails, with one line per findi
   - an include of lib/src or cli names a library header without its wing ("march.h" instead of
     "gi/march.h"), so that only the library's source root need be on the include path;
   - a unit includes a unit of a higher wing (WINGS below: io, then gi, then the pipeline, the
-    sequence processor, run; compare, reference and the plan beside the pipeline);
+    sequence processor, run, the options; compare, reference and the plan beside the pipeline);
   - the units include each other in a circle;
   - a public header includes a header of lib/src (an installed program has none of them).
 Usage: layering_test.py [PROJECT_SOURCE_DIR]
@@ -27,6 +27,7 @@ WINGS = {
     "pipeline": 4,
     "sequence_processor": 5,
     "run": 6, "memory": 6, "memory_plan": 6, "threads": 6, "simd": 6,
+    "options": 7,
 }
 
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"')

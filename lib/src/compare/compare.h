@@ -4,7 +4,6 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <string>
 #include <vector>
 
 #include "ssgi/compare.h"
@@ -12,9 +11,6 @@
 
 namespace ssgi {
 
-// Parses a comma list of metric names ("all" for every metric), in the order given without
-// repeats. Throws Error(kUsage) on an unknown or missing name.
-std::vector<Metric> parse_metric_list(const std::string& list);
 // True for PSNR and SSIM, where a larger value is a closer match.
 bool metric_higher_is_better(Metric metric);
 // relMSE = mean((a - b)^2 / (b^2 + epsilon)): epsilon keeps near-black reference pixels from

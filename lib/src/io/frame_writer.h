@@ -19,15 +19,6 @@ struct OutputLayer {
   std::vector<std::string> suffixes;
 };
 
-// Validates --compression (zip|zips|piz|rle|pxr24|b44|b44a|dwaa[:level]|dwab[:level]|none) and
-// returns OIIO's spelling. Throws Error(kUsage) otherwise.
-std::string parse_compression(const std::string& spec);
-
-// Validates --layer-prefix (one or more dot-separated names, e.g. "ssgi" or "gi.v2", each of
-// printable characters other than space) and returns it with its trailing '.'. Throws
-// Error(kUsage) otherwise.
-std::string parse_layer_prefix(const std::string& prefix);
-
 // Throws Error(kIO) naming `path` unless the directory `path` would be written into exists.
 void check_output_directory(const std::string& path);
 
