@@ -1,6 +1,6 @@
 // ssgi compare: OIIO idiff's comparison, numbers, report and exit codes, over one pair of
 // images or a sequence, with ssgi's own metrics (surface pixels, relRMSE, SSIM) on request.
-// The options are compare_options.cpp's, the report compare_report.cpp's.
+// The options are lib/src/options/compare_options.cpp's, the report compare_report.cpp's.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -11,10 +11,11 @@
 #include <vector>
 
 #include "commands.h"
+#include "compare/compare.h"
+#include "compare/compare_files.h"
 #include "compare_command.h"
-#include "ssgi/compare.h"
-#include "ssgi/error.h"
-#include "ssgi/sequence.h"
+#include "io/sequence.h"
+#include "throw.h"
 
 namespace ssgi_cli {
 namespace {

@@ -9,16 +9,20 @@
 #include <vector>
 
 #include "commands.h"
+#include "io/camera.h"
+#include "io/color.h"
+#include "io/frame_reader.h"
+#include "io/input_frame.h"
+#include "io/layout.h"
 #include "io/views.h"
+#include "log.h"
 #include "memory_plan.h"
-#include "run_options.h"
+#include "options/run_options.h"
+#include "plan.h"
+#include "settings.h"
 #include "simd.h"
-#include "ssgi/color.h"
-#include "ssgi/io.h"
-#include "ssgi/layout.h"
-#include "ssgi/log.h"
 #include "ssgi/pipeline.h"
-#include "ssgi/threads.h"
+#include "threads.h"
 
 namespace ssgi_cli {
 namespace {

@@ -15,12 +15,13 @@
 
 #include "commands.h"
 #include "draw.h"
-#include "run_options.h"
-#include "ssgi/color.h"
-#include "ssgi/error.h"
-#include "ssgi/log.h"
+#include "io/color.h"
+#include "io/frame_reader.h"
+#include "log.h"
+#include "options/run_options.h"
 #include "ssgi/run.h"
 #include "ssgi/threads.h"
+#include "throw.h"
 #include "truth_layer.h"
 
 namespace ssgi_cli {

@@ -4,8 +4,8 @@
 #include <string>
 
 #include "commands.h"
+#include "options/run_options.h"
 #include "progress.h"
-#include "run_options.h"
 #include "ssgi/error.h"
 
 namespace ssgi_cli {

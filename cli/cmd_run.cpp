@@ -2,8 +2,8 @@
 #include <cstdio>
 
 #include "commands.h"
+#include "options/run_options.h"
 #include "progress.h"
-#include "run_options.h"
 #include "ssgi/error.h"
 
 namespace ssgi_cli {

@@ -12,14 +12,16 @@
 #include <vector>
 
 #include "commands.h"
+#include "compare/compare.h"
+#include "io/frame_reader.h"
 #include "io/temporary_files.h"
-#include "run_options.h"
+#include "options/run_options.h"
+#include "settings.h"
 #include "ssgi/compare.h"
-#include "ssgi/error.h"
-#include "ssgi/io.h"
 #include "ssgi/log.h"
-#include "ssgi/threads.h"
 #include "sweep_plot.h"
+#include "threads.h"
+#include "throw.h"
 #include "truth_layer.h"
 
 namespace ssgi_cli {

@@ -12,6 +12,7 @@
 #include <utility>
 #include <vector>
 
+#include "compare/compare_files.h"
 #include "compare_command.h"
 
 namespace ssgi_cli {

@@ -1,5 +1,6 @@
-// The parts of `ssgi compare` (cmd_compare.cpp runs them): its options, the report of its
-// results as idiff's text or as JSON, and the note on channels paired by index.
+// The parts of `ssgi compare` (cmd_compare.cpp runs them) besides its options
+// (options/compare_options.h): the report of its results as idiff's text or as JSON, and the
+// note on channels paired by index.
 #pragma once
 
 #include <array>
@@ -7,24 +8,12 @@
 #include <string>
 #include <vector>
 
-#include "ssgi/compare.h"
+#include "compare/compare.h"
+#include "compare/compare_files.h"
+#include "options/compare_options.h"
 #include "ssgi/error.h"
 
 namespace ssgi_cli {
-
-// What the command line asks for.
-struct CompareArgs {
-  std::string a, b;
-  std::string frames;
-  bool verbose = false, quiet = false, json = false;
-  std::vector<ssgi::Metric> metrics;  // empty: idiff's numbers only
-  ssgi::IdiffOptions idiff;
-  ssgi::FileCompareOptions file;  // ssgi's metrics
-};
-
-// Parses `ssgi compare`'s arguments (idiff's options and ssgi's). Returns nullopt after
-// printing --help; throws Error(kUsage) for anything it cannot take.
-std::optional<CompareArgs> parse_compare_args(int argc, char** argv);
 
 // What to compare: one pair of files per frame, or a single pair.
 struct CompareJob {

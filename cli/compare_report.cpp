@@ -10,8 +10,9 @@
 #include <string>
 #include <vector>
 
+#include "compare/compare.h"
+#include "compare/idiff.h"
 #include "compare_command.h"
-#include "ssgi/compare.h"
 #include "ssgi/error.h"
 
 namespace ssgi_cli {

@@ -8,7 +8,7 @@
 #include <system_error>
 
 #include "io/temporary_files.h"
-#include "ssgi/error.h"
+#include "throw.h"
 
 namespace ssgi_cli {
 namespace {

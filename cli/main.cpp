@@ -8,6 +8,7 @@
 #include <string>
 
 #include "commands.h"
+#include "fast_malloc.h"
 #include "io/temporary_files.h"
 #include "ssgi/error.h"
 #include "ssgi/version.h"
@@ -67,6 +68,7 @@ void install_signal_handlers() {
 
 int main(int argc, char** argv) {
   install_signal_handlers();
+  ssgi_cli::keep_no_freed_blocks();
   if (argc < 2) {
     print_usage(stderr);
     return ssgi_cli::kExitUsage;

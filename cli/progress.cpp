@@ -16,10 +16,11 @@
 
 #include "commands.h"
 #include "io/temporary_files.h"
+#include "log.h"
+#include "settings.h"
 #include "simd.h"
 #include "ssgi/error.h"
-#include "ssgi/log.h"
-#include "ssgi/threads.h"
+#include "threads.h"
 
 namespace ssgi_cli {
 namespace {

@@ -2,7 +2,7 @@
 // `ssgi reference` share once their options are parsed.
 #pragma once
 
-#include "run_options.h"
+#include "options/run_options.h"
 
 namespace ssgi_cli {
 

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <vector>
 
-#include "ssgi/error.h"
+#include "throw.h"
 
 namespace ssgi_cli {
 namespace {

@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "ssgi/layout.h"
+#include "io/layout.h"
 
 namespace ssgi_cli {
 

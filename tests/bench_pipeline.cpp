@@ -7,7 +7,8 @@
 #include <filesystem>
 #include <string>
 
-#include "ssgi/io.h"
+#include "io/frame_reader.h"
+#include "plan.h"
 #include "ssgi/pipeline.h"
 #include "ssgi/threads.h"
 

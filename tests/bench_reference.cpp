@@ -7,8 +7,9 @@
 #include <filesystem>
 #include <string>
 
+#include "io/frame_reader.h"
+#include "plan.h"
 #include "reference/reference.h"
-#include "ssgi/io.h"
 #include "ssgi/pipeline.h"
 #include "ssgi/threads.h"
 

@@ -25,8 +25,9 @@
 #include "gi/misses.h"
 #include "gi/slice_kernel.h"
 #include "gi/slices.h"
+#include "io/frame_reader.h"
 #include "io/views.h"
-#include "ssgi/io.h"
+#include "plan.h"
 #include "ssgi/pipeline.h"
 #include "ssgi/threads.h"
 

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "io/camera.h"
 #include "io/camera_header.h"
 #include "ssgi/error.h"
 

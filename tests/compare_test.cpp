@@ -1,6 +1,6 @@
 // Tests of `ssgi compare`: metrics against values worked out by hand on tiny images, idiff's
 // threshold rules, channel selection by name, and the CLI's exit codes on small EXRs.
-#include "ssgi/compare.h"
+#include "compare/compare.h"
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
@@ -18,6 +18,8 @@
 #include <string>
 #include <vector>
 
+#include "compare/compare_files.h"
+#include "options/compare_options.h"
 #include "ssgi/error.h"
 
 namespace ssgi {
@@ -318,11 +320,11 @@ TEST(CompareSummary, MeanWorstAndWorstFrame) {
 }
 
 TEST(CompareMetricList, ParsesNamesAndAll) {
-  EXPECT_EQ(parse_metric_list("psnr,rmse,psnr"),
+  EXPECT_EQ(ssgi_cli::parse_metric_list("psnr,rmse,psnr"),
             (std::vector<Metric>{Metric::kPsnr, Metric::kRmse}));
-  EXPECT_EQ(parse_metric_list("all").size(), 5u);
+  EXPECT_EQ(ssgi_cli::parse_metric_list("all").size(), 5u);
   try {
-    parse_metric_list("rmse,flip");
+    ssgi_cli::parse_metric_list("rmse,flip");
     FAIL() << "no throw";
   } catch (const Error& e) {
     EXPECT_EQ(e.kind(), ErrorKind::kUsage);

@@ -3,7 +3,8 @@
 
 #include <string>
 
-#include "ssgi/io.h"
+#include "io/frame_reader.h"
+#include "plan.h"
 #include "ssgi/pipeline.h"
 
 namespace ssgi::test_fixtures {

@@ -7,7 +7,7 @@ is a unit of its own when none does (types only). Fails, with one line per findi
   - an include of lib/src or cli names a library header without its wing ("march.h" instead of
     "gi/march.h"), so that only the library's source root need be on the include path;
   - a unit includes a unit of a higher wing (WINGS below: io, then gi, then the pipeline, the
-    sequence processor, run; compare and reference beside the pipeline);
+    sequence processor, run, the options; compare, reference and the plan beside the pipeline);
   - the units include each other in a circle;
   - a public header includes anything but another public header (ssgi/...) or a system header:
     a header of lib/src would have to be installed with it;
@@ -25,13 +25,15 @@ import sys
 # A unit may include units of its own rank or below. Ranks of the units at lib/src's root are
 # given one by one; a folder's units share the folder's rank.
 WINGS = {
-    "parallel": 0, "image": 0, "log": 0, "settings": 0, "version": 0,
+    "parallel": 0, "buffers": 0, "throw": 0, "image": 0, "log": 0, "settings": 0,
+    "version": 0,
     "io": 1,
     "gi": 2,
-    "compare": 3, "reference": 3,
+    "compare": 3, "reference": 3, "plan": 3,
     "pipeline": 4,
     "sequence_processor": 5,
     "run": 6, "memory": 6, "memory_plan": 6, "threads": 6, "simd": 6,
+    "options": 7,
 }
 
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"')

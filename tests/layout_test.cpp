@@ -1,4 +1,4 @@
-#include "ssgi/layout.h"
+#include "io/layout.h"
 
 #include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>

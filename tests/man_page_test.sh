@@ -2,8 +2,8 @@
 # Checks the man pages in man/ (ssgi(1), ssgi-<subcommand>(1), the ssgi-*(7) topics):
 # - every long option that `ssgi <subcommand> --help` lists has an entry (a .TP tag) in
 #   man/ssgi-<subcommand>.1, as \-\-name or --name (compare's one-dash options as \-name);
-# - every long option of the option table and the getopt_long tables of cli/*.cpp has an entry
-#   in at least one page;
+# - every long option of the option table and the getopt_long tables of cli/*.cpp and
+#   lib/src/options/*.cpp has an entry in at least one page;
 # - every page renders with groff without a single warning, is listed in ssgi(1)'s SEE ALSO,
 #   and is installed by the top-level CMakeLists.txt into man1 or man7 as its section says.
 # Each failure is one line naming the page and what is missing.
@@ -84,23 +84,23 @@ for sub in "${subcommands[@]}"; do
 done
 
 # 2. Every long option in the sources has an entry in some page: the option table's entries
-# ({kMaxSteps, "max-steps", ...} in cli/option_table.cpp) and getopt_long tables
+# ({kMaxSteps, "max-steps", ...} in lib/src/options/option_table.cpp) and getopt_long tables
 # ({"max-steps", required_argument, ...}).
 mapfile -t source_options < <( {
   grep -ohE '\{"[A-Za-z0-9][A-Za-z0-9-]*",[[:space:]]*(no|required|optional)_argument' \
-    "$root"/cli/*.cpp | sed -E 's/^\{"([^"]+)".*/\1/'
-  grep -ohE "^[[:space:]]*\{(k[A-Za-z]+|'[a-z]'), \"[a-z0-9-]+\"," "$root"/cli/option_table.cpp |
-    sed -E 's/.*"([^"]+)",$/\1/'
+    "$root"/cli/*.cpp "$root"/lib/src/options/*.cpp | sed -E 's/^\{"([^"]+)".*/\1/'
+  grep -ohE "^[[:space:]]*\{(k[A-Za-z]+|'[a-z]'), \"[a-z0-9-]+\"," \
+    "$root"/lib/src/options/option_table.cpp | sed -E 's/.*"([^"]+)",$/\1/'
 } | grep -E '^.{2,}$' | sort -u)
 if [ ${#source_options[@]} -eq 0 ]; then
-  echo "man_page_test: found no long options in $root/cli/*.cpp" >&2
+  echo "man_page_test: found no long options in $root/cli/*.cpp, $root/lib/src/options/*.cpp" >&2
   fail=1
 fi
 all_tags=$(entry_tags "${pages[@]}")
 for name in "${source_options[@]}"; do
   # compare's idiff options are written with one dash (-fail), the others with two.
   if ! printf '%s\n' "$all_tags" | has_option "-$name"; then
-    echo "man_page_test: man/*: no entry for --$name (cli/*.cpp)" >&2
+    echo "man_page_test: man/*: no entry for --$name (cli/*.cpp, lib/src/options/*.cpp)" >&2
     fail=1
   fi
 done

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "parallel.h"
+#include "plan.h"
 #include "ssgi/error.h"
 #include "ssgi/pipeline.h"
 #include "ssgi/run.h"

@@ -10,9 +10,10 @@
 #include <string>
 #include <vector>
 
+#include "io/camera.h"
+#include "io/layout.h"
 #include "ssgi/camera.h"
 #include "ssgi/image.h"
-#include "ssgi/layout.h"
 
 namespace ssgi {
 namespace {

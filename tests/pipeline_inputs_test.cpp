@@ -1,6 +1,6 @@
 // What the reader gives the pipeline: colour transforms on the light and albedo passes only, and
-// normals derived from depth; and the composite of those passes, written beside them or over
-// them.
+// normals derived from depth; the composite of those passes, written beside them or over them;
+// and the same frame given as buffers instead.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -11,10 +11,11 @@
 
 #include "gi/composite.h"
 #include "gtest/gtest.h"
+#include "io/color.h"
 #include "io/input_frame.h"
 #include "io/pass_agreement.h"
 #include "pipeline_support.h"
-#include "ssgi/color.h"
+#include "plan.h"
 
 namespace ssgi::pipeline_test {
 namespace {
@@ -157,6 +158,29 @@ TEST(Pipeline, CompositeInPlaceGivesTheBitsOfTheCompositeBeside) {
     ++cases;
   }
   EXPECT_EQ(cases, 3);
+}
+
+// A frame given as buffers (still_sequence) is lit as its file is: the same bits, with the same
+// coverage; and a pass with the wrong channels or size is a usage error that names it.
+TEST(Pipeline, AStillSequenceLightsBuffersAsTheirFileIs) {
+  GiSettings s;
+  const Frame f = load("sample/sample.0001.exr", s);
+  Image file_coverage, buffers_coverage;
+  const Image file = Pipeline(f.seq, s).indirect_light(f.g, &file_coverage);
+  const Image buffers = Pipeline(*still_sequence(f.g), s).indirect_light(f.g, &buffers_coverage);
+  EXPECT_TRUE(same_bits(file, buffers));
+  EXPECT_TRUE(same_bits(file_coverage, buffers_coverage));
+  for (const bool wrong_size : {false, true}) {
+    GBuffer g = f.g;
+    g.normal = Image(g.width() - (wrong_size ? 1 : 0), g.height(), wrong_size ? 3 : 1);
+    try {
+      still_sequence(g);
+      ADD_FAILURE() << "accepted a normal pass it cannot use";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::kUsage);
+      EXPECT_NE(std::string(e.what()).find("normal"), std::string::npos) << e.what();
+    }
+  }
 }
 
 }  // namespace

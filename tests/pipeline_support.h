@@ -5,7 +5,7 @@
 #include <string>
 
 #include "fixture_frame.h"
-#include "ssgi/io.h"
+#include "io/frame_reader.h"
 #include "ssgi/pipeline.h"
 
 namespace ssgi::pipeline_test {

@@ -21,6 +21,7 @@
 #include "gi/surface_model.h"
 #include "gi/trace_grid.h"
 #include "gtest/gtest.h"
+#include "io/camera.h"
 #include "io/views.h"
 #include "pipeline_support.h"
 

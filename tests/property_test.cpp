@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "settings.h"
 #include "ssgi/run.h"
 
 namespace ssgi {

@@ -14,14 +14,14 @@
 #include <string>
 #include <vector>
 
+#include "compare/compare.h"
 #include "fixture_frame.h"
 #include "gi/composite.h"
 #include "gi/directions.h"
 #include "gi/gather.h"
 #include "gi/misses.h"
 #include "gi/surface_model.h"
-#include "ssgi/compare.h"
-#include "ssgi/io.h"
+#include "io/frame_reader.h"
 #include "ssgi/pipeline.h"
 
 namespace ssgi {

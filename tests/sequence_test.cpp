@@ -1,5 +1,5 @@
 // Tests of sequence patterns, frame lists and the scan for frames on disk.
-#include "ssgi/sequence.h"
+#include "io/sequence.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>

@@ -16,9 +16,9 @@
 #include <string>
 #include <vector>
 
+#include "io/frame_reader.h"
 #include "ssgi/camera.h"
 #include "ssgi/error.h"
-#include "ssgi/io.h"
 #include "ssgi/threads.h"
 
 namespace ssgi::detail {

@@ -11,10 +11,10 @@
 #include "gi/gather.h"
 #include "gi/march.h"
 #include "gi/slices.h"
+#include "log.h"
 #include "parallel.h"
 #include "reference/reference.h"
 #include "ssgi/error.h"
-#include "ssgi/log.h"
 
 namespace ssgi::detail {
 

@@ -18,10 +18,10 @@
 #include "gi/environment.h"
 #include "gi/misses.h"
 #include "gi/temporal.h"
-#include "ssgi/color.h"
+#include "io/color.h"
+#include "io/frame_reader.h"
+#include "plan.h"
 #include "ssgi/gbuffer.h"
-#include "ssgi/io.h"
-#include "ssgi/plan.h"
 #include "ssgi/settings.h"
 
 namespace ssgi::detail {

@@ -1,4 +1,4 @@
-#include "ssgi/log.h"
+#include "log.h"
 
 #include <mutex>
 

@@ -15,7 +15,7 @@
 #include "io/oiio_files.h"
 #include "io/views.h"
 #include "reference/reference.h"
-#include "ssgi/error.h"
+#include "throw.h"
 
 namespace ssgi {
 namespace {

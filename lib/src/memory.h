@@ -7,8 +7,8 @@
 #include <functional>
 #include <string>
 
-#include "ssgi/io.h"
-#include "ssgi/plan.h"
+#include "io/frame_reader.h"
+#include "plan.h"
 #include "ssgi/settings.h"
 
 namespace ssgi {

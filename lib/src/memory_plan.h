@@ -4,9 +4,9 @@
 
 #include <string>
 
+#include "io/frame_reader.h"
 #include "memory.h"
-#include "ssgi/io.h"
-#include "ssgi/plan.h"
+#include "plan.h"
 #include "ssgi/settings.h"
 
 namespace ssgi {

@@ -1,12 +1,13 @@
 // The plan: which stages run and which channels are read, from the inputs and the settings.
-#include "ssgi/plan.h"
+#include "plan.h"
 
 #include <algorithm>
 #include <cmath>
 #include <sstream>
 
 #include "gi/denoise.h"
-#include "ssgi/error.h"
+#include "settings.h"
+#include "throw.h"
 
 namespace ssgi {
 namespace {

@@ -10,13 +10,17 @@
 #include <set>
 
 #include "frame_stages.h"
+#include "io/frame_reader.h"
+#include "io/frame_writer.h"
 #include "io/preview.h"
+#include "log.h"
 #include "memory.h"
 #include "memory_plan.h"
 #include "sequence_processor.h"
-#include "ssgi/log.h"
+#include "settings.h"
 #include "ssgi/settings.h"
 #include "ssgi/version.h"
+#include "throw.h"
 
 namespace ssgi {
 namespace {

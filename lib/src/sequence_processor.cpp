@@ -19,11 +19,11 @@
 #include "frame_stages.h"
 #include "gi/continuation.h"
 #include "gi/temporal.h"
+#include "io/sequence.h"
 #include "io/views.h"
+#include "log.h"
 #include "parallel.h"
 #include "ssgi/error.h"
-#include "ssgi/log.h"
-#include "ssgi/sequence.h"
 
 namespace ssgi::detail {
 namespace {

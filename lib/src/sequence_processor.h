@@ -9,9 +9,9 @@
 #include <vector>
 
 #include "frame_stages.h"
+#include "io/frame_reader.h"
 #include "io/input_frame.h"
 #include "ssgi/io.h"
-#include "ssgi/report.h"
 
 namespace ssgi::detail {
 

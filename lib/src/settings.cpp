@@ -1,10 +1,10 @@
 // Presets and the settings as text.
-#include "ssgi/settings.h"
+#include "settings.h"
 
 #include <charconv>
 #include <cstdlib>
 
-#include "ssgi/error.h"
+#include "throw.h"
 
 namespace ssgi {
 namespace {

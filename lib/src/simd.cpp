@@ -10,8 +10,8 @@
 #include <mutex>
 
 #include "gi/denoise_kernels.h"
-#include "ssgi/error.h"
-#include "ssgi/log.h"
+#include "log.h"
+#include "throw.h"
 
 namespace ssgi {
 namespace {

@@ -1,4 +1,4 @@
-#include "ssgi/threads.h"
+#include "threads.h"
 
 #include <sched.h>
 #include <tbb/global_control.h>
@@ -9,7 +9,7 @@
 #include <fstream>
 #include <string>
 
-#include "ssgi/io.h"
+#include "io/frame_reader.h"
 
 namespace ssgi {
 namespace {

@@ -13,8 +13,10 @@
 #include <fstream>
 #include <string>
 
+#include "io/frame_reader.h"
+#include "io/frame_writer.h"
+#include "plan.h"
 #include "ssgi/error.h"
-#include "ssgi/io.h"
 #include "ssgi/log.h"
 #include "ssgi/pipeline.h"
 #include "ssgi/settings.h"

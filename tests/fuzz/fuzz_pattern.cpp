@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "io/sequence.h"
 #include "ssgi/error.h"
-#include "ssgi/sequence.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);

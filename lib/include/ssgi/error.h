@@ -14,6 +14,7 @@ enum class ErrorKind {
   kInternal,  // a bug: an invariant did not hold
 };
 
+// An error with its kind and the file it is about: what every function of the library throws.
 class Error : public std::runtime_error {
  public:
   // `file` is the file the problem is about, or empty when there is none.
@@ -27,16 +28,5 @@ class Error : public std::runtime_error {
   ErrorKind kind_;
   std::string file_;
 };
-
-// Convenience throwers, so that call sites read as one line.
-[[noreturn]] inline void throw_usage(const std::string& what) {
-  throw Error(ErrorKind::kUsage, {}, what);
-}
-[[noreturn]] inline void throw_input(const std::string& file, const std::string& what) {
-  throw Error(ErrorKind::kInput, file, what);
-}
-[[noreturn]] inline void throw_io(const std::string& file, const std::string& what) {
-  throw Error(ErrorKind::kIO, file, what);
-}
 
 }  // namespace ssgi

@@ -11,18 +11,16 @@
 
 namespace ssgi {
 
-// One frame's inputs after the reader converted them to the library's conventions. Every
-// image covers the data window; an image with no channels is a pass the run does not use or
-// the input does not provide.
+// One frame's inputs in the library's conventions, as the reader converts them or a program makes
+// them. Every image covers the data window; one with no channels is a pass absent or unused.
 struct GBuffer {
   std::string path;  // the file it was read from
   int frame = 0;
   Box2i display_window;
   Box2i data_window;
   Camera camera;
-  // The normal pass and the space it was read in, and why (the layout, --normal-space, or its
-  // agreement with the depth's normals), e.g. "ViewLayer.Normal in world space, as the blender
-  // layout says"; empty when the normals are not read from a pass.
+  // The normal pass, the space it was read in and why, e.g. "ViewLayer.Normal in world space, as
+  // the blender layout says"; empty when the normals are not read from a pass.
   std::string normals_source;
 
   Image depth;                // 1: planar camera-space z; +inf where there is no surface
@@ -50,9 +48,8 @@ struct FrameResult {
   Image indirect;   // 3: diffuse indirect light without albedo (Cycles' DiffInd)
   Image gi;         // 3: albedo x indirect
   Image composite;  // 4: direct + emission + gi on surfaces, the input beauty elsewhere
-  // 1: the share of the indirect light that traced rays brought (1) rather than the miss
-  // model's estimate of what lies off screen or behind everything (0); 0 on background. Empty
-  // when the caller gave none to composite().
+  // 1: the share of the indirect light traced rays brought (1) rather than the miss model (0);
+  // 0 on background. Empty when the caller gave none to composite().
   Image coverage;
 };
 

@@ -4,53 +4,9 @@
 #include <cassert>
 #include <cstddef>
 #include <memory>
-#include <new>
-#include <utility>
 #include <vector>
 
 namespace ssgi {
-
-namespace detail {
-
-// Blocks of `bytes` for large buffers (image.cpp): from kLargeBlock bytes up, aligned to 2 MB
-// and, on Linux, advised to be backed by transparent huge pages, which their first touch then
-// faults in 2 MB at a time instead of 4 KB (a 1080p plane is 8 MB: 4 faults, not 2025).
-// Smaller ones are plain operator new.
-void* allocate_block(std::size_t bytes);
-void free_block(void* p, std::size_t bytes) noexcept;
-
-// std::allocator, but a new element is default-initialised (a float is left as it is) rather
-// than zeroed: for buffers their owner fills right after, in parallel (Image's planes); and
-// large buffers are allocated in huge pages (allocate_block).
-template <typename T>
-struct UninitializedAllocator : std::allocator<T> {
-  template <typename U>
-  struct rebind {
-    using other = UninitializedAllocator<U>;
-  };
-  UninitializedAllocator() = default;
-  template <typename U>
-  UninitializedAllocator(const UninitializedAllocator<U>&) noexcept {}
-  T* allocate(std::size_t n) {
-    if (n > static_cast<std::size_t>(-1) / sizeof(T)) throw std::bad_array_new_length();
-    return static_cast<T*>(allocate_block(n * sizeof(T)));
-  }
-  void deallocate(T* p, std::size_t n) noexcept { free_block(p, n * sizeof(T)); }
-  template <typename U>
-  void construct(U* p) noexcept(noexcept(::new (static_cast<void*>(p)) U)) {
-    ::new (static_cast<void*>(p)) U;
-  }
-  template <typename U, typename... Args>
-  void construct(U* p, Args&&... args) {
-    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
-  }
-};
-
-// A vector whose resize leaves new elements uninitialised.
-template <typename T>
-using UninitializedVector = std::vector<T, UninitializedAllocator<T>>;
-
-}  // namespace detail
 
 // A half-open pixel rectangle [x0, x1) x [y0, y1) in display-window coordinates
 // (OpenEXR's windows are inclusive; the reader converts).
@@ -73,13 +29,26 @@ struct Box2i {
 // A planar float32 image: `channels` planes of width x height, row-major, no padding.
 // An image with zero channels is "absent" (a pass the input does not provide).
 class Image {
+  // The planes' storage: large blocks in huge pages, and a new value left unset rather than
+  // zeroed, since the image fills its planes right after, in parallel.
+  struct Allocator : std::allocator<float> {
+    template <typename U>
+    struct rebind {
+      using other = Allocator;  // an image holds floats only
+    };
+    float* allocate(std::size_t n);
+    void deallocate(float* p, std::size_t n) noexcept;
+    void construct(float*) noexcept {}
+    void construct(float* p, float v) noexcept { *p = v; }
+  };
+
  public:
   // The planes, one after the other. Growing it (resize) leaves the new values unset.
-  using Planes = detail::UninitializedVector<float>;
+  using Planes = std::vector<float, Allocator>;
 
   Image() = default;
-  // Every value `fill`, written in parallel: a frame's planes are tens of megabytes, and one
-  // thread writing them (the first touch of their pages) would be a serial part of every frame.
+  // Every value `fill`, written in parallel: one thread first touching a frame's tens of
+  // megabytes would be a serial part of every frame.
   Image(int width, int height, int channels, float fill = 0.0f);
 
   int width() const { return width_; }

@@ -6,9 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "ssgi/color.h"
 #include "ssgi/gbuffer.h"
-#include "ssgi/io.h"
 #include "ssgi/plan.h"
 #include "ssgi/settings.h"
 

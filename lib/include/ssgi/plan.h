@@ -1,50 +1,44 @@
-// What a run does, decided once from what the inputs provide and what the user asked.
+// What a frame's pipeline is made from (its sequence, what it may hold) and a run's memory limit.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
-#include <vector>
 
-#include "ssgi/io.h"
-#include "ssgi/settings.h"
+#include "ssgi/gbuffer.h"
 
 namespace ssgi {
 
-// What a run does, decided once from what the inputs provide and what the user asked: the
-// only place that chooses stages, channels and buffers.
-struct Plan {
-  RoleMask roles = 0;            // the channels the reader reads
-  bool gather_emission = false;  // emission is part of the light rays pick up
-  int trace_scale = 1;           // data-window pixels per trace sample, each axis
-  bool env_map = false;          // misses look up an environment map
-  bool denoise = false;
-  TemporalMode temporal = TemporalMode::kNone;
-  int multiframe = 0;                // frames each side that missed rays are continued in (0: none)
-  bool views = false;                // missed rays continued in the shot's views (--view) first
-  std::vector<std::string> reasons;  // one line per decision, for `ssgi info` and -v
-  std::vector<std::string> warnings;  // what `ssgi run` and `ssgi info` warn about, one line each
-};
+// A sequence as the library's reader finds it on disk (its windows, frames, channels, layout
+// and views), opaque to programs: a run opens its own, still_sequence makes one for buffers.
+struct SequenceInfo;
 
-// Decides the plan for `sequence` under `settings`.
-Plan make_plan(const SequenceInfo& sequence, const GiSettings& settings);
+// The sequence of one frame given as buffers, read from no file: the windows of `frame` and the
+// passes it holds (its non-empty images), no other frame (no temporal stage), no views. Throws
+// Error(kUsage) unless depth has 1 channel and normal, albedo, direct 3, over the data window.
+std::shared_ptr<const SequenceInfo> still_sequence(const GBuffer& frame);
 
-// What the pipeline may hold besides its frames' planes. It does not change the light.
+// A run's colour spaces (GiSettings::color) and the processors between them, opaque to programs.
+class ColorManagement;
+
+// What a run does (the stages, the passes read), decided once; opaque to programs.
+struct Plan;
+
+// What the pipeline and a run may hold besides the frames' planes (a run chooses it for its
+// memory limit). It does not change the light.
 struct PipelineMemory {
-  // The Embree reference keeps, for the bounces after the first, the hits of as many rows as
-  // fit in this many bytes (4 per ray), and traces the other rows again for each bounce.
+  // The bytes of hits (4 a ray) the Embree reference keeps for the bounces after the first; the
+  // rows beyond them are traced again for each bounce.
   std::size_t reference_hits_bytes = std::size_t{1} << 30;
-  // Frames between reading and writing at once in run_sequence: 3 reads the next frame and
-  // writes the last while lighting one; 2 overlaps two of those; 1 does one after the other.
-  // pipeline_memory_within chooses (1 without a limit, the least memory).
+  // Frames read, lit and written at once: 3 reads the next and writes the last while lighting
+  // one, 2 overlaps two of those, 1 does one after the other.
   int frames_in_flight = 2;
-  // The symmetric window finishes a frame only after its later neighbours are lit. Kept, a frame
-  // waiting for them holds its full-resolution passes; read twice, it holds only its light on
-  // the trace grid and is decoded again to be finished: the least memory, for a second decoding
-  // of each frame written (the same bits either way).
+  // The window's frames waiting for their later neighbours hold only their light on the trace
+  // grid and are decoded again to be finished: the least memory, the same bits.
   bool read_twice = false;
-  // Whether a frame's passes are read after its composite (a callback, the preview): the
-  // composite is then written beside them rather than over them.
+  // A frame's passes are read after its composite (a callback, the preview), which is then
+  // written beside them rather than over them.
   bool passes_read_after_composite = false;
 };
 

@@ -1,33 +1,24 @@
-// The library's worker threads: how many, decided from --threads, the scheduler's allocation
-// or the machine, and a limit that holds for as long as an object lives.
+// The library's worker threads: a limit on how many, for as long as an object lives.
 #pragma once
 
 #include <memory>
-#include <string>
 
 namespace ssgi {
 
-// How many worker threads a run uses, and what decided it.
-struct ThreadBudget {
-  int threads = 1;
-  std::string source;  // "--threads", "SLURM_CPUS_PER_TASK", "CUE_THREADS", "cgroup cpu.max", ...
-};
+// How many threads the limit allows and what decided it, opaque to programs.
+struct ThreadBudget;
 
-// `requested` > 0 (--threads) wins; else the scheduler's allocation: Slurm's
-// SLURM_CPUS_PER_TASK, OpenCue's CUE_THREADS, the cgroup's CPU quota (cgroup v2 cpu.max, v1
-// cpu.cfs_quota_us over cpu.cfs_period_us, rounded up); else the CPUs this process may run on.
-// A farm node's core count is not what a task was given.
-ThreadBudget thread_budget(int requested);
-
+// A cap on the library's worker threads (and OIIO's and OpenEXR's) while the object lives.
 class ThreadLimit {
  public:
-  // Caps the library's parallelism (and OIIO's and OpenEXR's) at thread_budget(requested).
+  // `requested` > 0 (--threads) threads; 0: the scheduler's allocation (Slurm, OpenCue, the
+  // cgroup's CPU quota), else the CPUs this process may run on.
   explicit ThreadLimit(int requested);
   ~ThreadLimit();
   ThreadLimit(const ThreadLimit&) = delete;
   ThreadLimit& operator=(const ThreadLimit&) = delete;
 
-  const ThreadBudget& budget() const;
+  const ThreadBudget& budget() const;  // the threads allowed and what decided it
 
  private:
   struct Impl;

@@ -1,13 +1,12 @@
 // ssgi's error metrics between planar float images: RMSE, relRMSE, relMSE, PSNR, SSIM over
 // the foreground pixels of each layer.
-#include "ssgi/compare.h"
+#include "compare/compare.h"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <sstream>
 
-#include "ssgi/error.h"
+#include "throw.h"
 
 namespace ssgi {
 namespace {
@@ -170,44 +169,6 @@ const char* metric_name(Metric metric) {
 
 bool metric_higher_is_better(Metric metric) {
   return metric == Metric::kPsnr || metric == Metric::kSsim;
-}
-
-std::vector<Metric> parse_metric_list(const std::string& list) {
-  std::vector<Metric> metrics;
-  auto add = [&](Metric m) {
-    if (std::find(metrics.begin(), metrics.end(), m) == metrics.end()) metrics.push_back(m);
-  };
-  std::stringstream stream(list);
-  std::string name;
-  bool any = false;
-  while (std::getline(stream, name, ',')) {
-    any = true;
-    bool known = false;
-    for (int i = 0; i < kMetricCount; ++i) {
-      const Metric m = static_cast<Metric>(i);
-      if (name == "all" || name == metric_name(m)) {
-        add(m);
-        known = true;
-      }
-    }
-    if (!known)
-      throw_usage("unknown metric '" + name + "' in '" + list +
-                  "' (rmse, relrmse, relmse, psnr, ssim, all)");
-  }
-  if (!any) throw_usage("empty metric list");
-  return metrics;
-}
-
-const char* status_name(CompareStatus status) {
-  switch (status) {
-    case CompareStatus::kOk:
-      return "ok";
-    case CompareStatus::kWarn:
-      return "warn";
-    case CompareStatus::kFail:
-      return "fail";
-  }
-  return "?";
 }
 
 std::vector<std::uint8_t> background_from_depth(const float* depth, std::size_t pixels) {

@@ -1,5 +1,7 @@
 // Comparing two image files: channels selected by name across all subimages, read with OIIO,
 // for ssgi's metrics (compare_images()) and for idiff's comparison of chosen channels.
+#include "compare/compare_files.h"
+
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/strutil.h>
 #include <unistd.h>
@@ -13,9 +15,9 @@
 #include <map>
 #include <memory>
 
+#include "compare/compare.h"
 #include "io/oiio_files.h"
-#include "ssgi/compare.h"
-#include "ssgi/error.h"
+#include "throw.h"
 
 namespace ssgi {
 namespace {

@@ -1,13 +1,13 @@
 // idiff's numbers and verdict: OpenImageIO's own ImageBufAlgo::compare, which idiff calls, and
 // the rules of idiff's verdict.
+#include "compare/idiff.h"
+
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imagebufalgo.h>
 
 #include <algorithm>
 #include <cmath>
 #include <vector>
-
-#include "ssgi/compare.h"
 
 namespace ssgi {
 namespace {
@@ -37,6 +37,18 @@ OIIO::ImageBuf image_buf(const WindowedImage& image, int channels, std::vector<f
 }
 
 }  // namespace
+
+const char* status_name(CompareStatus status) {
+  switch (status) {
+    case CompareStatus::kOk:
+      return "ok";
+    case CompareStatus::kWarn:
+      return "warn";
+    case CompareStatus::kFail:
+      return "fail";
+  }
+  return "?";
+}
 
 IdiffStats idiff_compare(const WindowedImage& a, const WindowedImage& b,
                          const IdiffThresholds& thresholds) {

@@ -10,6 +10,7 @@
 
 #include "gi/march.h"
 #include "gi/surface_model.h"
+#include "io/camera.h"
 #include "parallel.h"
 
 namespace ssgi::detail {

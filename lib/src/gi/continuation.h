@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "buffers.h"
 #include "gi/directions.h"
 #include "gi/gather.h"
 #include "gi/misses.h"

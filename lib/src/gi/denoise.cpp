@@ -18,9 +18,10 @@
 #include <string>
 #include <vector>
 
+#include "buffers.h"
 #include "gi/denoise_kernels.h"
 #include "parallel.h"
-#include "ssgi/error.h"
+#include "throw.h"
 
 namespace ssgi::detail {
 namespace {

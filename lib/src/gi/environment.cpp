@@ -8,8 +8,8 @@
 #include <cmath>
 
 #include "io/oiio_files.h"
-#include "ssgi/error.h"
 #include "ssgi/log.h"
+#include "throw.h"
 
 namespace ssgi::detail {
 

@@ -5,7 +5,7 @@
 #include <string>
 
 #include "gi/directions.h"
-#include "ssgi/color.h"
+#include "io/color.h"
 #include "ssgi/image.h"
 
 namespace ssgi::detail {

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "buffers.h"
 #include "gi/march.h"
 #include "gi/misses.h"
 #include "gi/trace_grid.h"

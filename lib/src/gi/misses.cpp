@@ -6,7 +6,9 @@
 #include <cstdio>
 #include <vector>
 
+#include "buffers.h"
 #include "gi/trace_grid.h"
+#include "io/camera.h"
 #include "parallel.h"
 
 namespace ssgi::detail {

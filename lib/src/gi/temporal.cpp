@@ -14,8 +14,10 @@
 #include <utility>
 #include <vector>
 
+#include "buffers.h"
+#include "io/camera.h"
 #include "parallel.h"
-#include "ssgi/error.h"
+#include "throw.h"
 
 namespace ssgi::detail {
 namespace {

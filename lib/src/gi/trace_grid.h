@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "buffers.h"
 #include "parallel.h"
 #include "ssgi/gbuffer.h"
 #include "ssgi/image.h"

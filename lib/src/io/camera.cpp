@@ -1,14 +1,14 @@
 // Pinhole camera maths: 4x4 matrices in Imath's row-vector convention, projection to
 // display-window pixels, and cameras built from a field of view or from OpenEXR's
 // worldToCamera/worldToNDC pair.
-#include "ssgi/camera.h"
+#include "io/camera.h"
 
 #include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <string>
 
-#include "ssgi/error.h"
+#include "throw.h"
 
 namespace ssgi {
 namespace {

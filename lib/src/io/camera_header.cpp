@@ -16,7 +16,8 @@
 #include <string>
 #include <vector>
 
-#include "ssgi/error.h"
+#include "io/camera.h"
+#include "throw.h"
 
 namespace ssgi::detail {
 namespace {

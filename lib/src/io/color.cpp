@@ -1,6 +1,6 @@
 // Colour management: the OCIO config, the run's colour spaces and the processors between
 // them, built once and applied row by row in the library's parallel loops.
-#include "ssgi/color.h"
+#include "io/color.h"
 
 #include <OpenColorIO/OpenColorIO.h>
 #include <OpenImageIO/strutil.h>
@@ -10,9 +10,11 @@
 #include <cstdlib>
 #include <filesystem>
 
+#include "io/sequence_info.h"
+#include "log.h"
 #include "parallel.h"
-#include "ssgi/error.h"
-#include "ssgi/log.h"
+#include "settings.h"
+#include "throw.h"
 
 namespace ssgi {
 

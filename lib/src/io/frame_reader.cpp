@@ -1,4 +1,6 @@
 // Reading renderer EXR sequences into the library's G-buffer.
+#include "io/frame_reader.h"
+
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
@@ -14,17 +16,18 @@
 #include <optional>
 #include <regex>
 
+#include "io/camera.h"
 #include "io/camera_fit.h"
 #include "io/camera_header.h"
+#include "io/color.h"
 #include "io/input_frame.h"
 #include "io/oiio_files.h"
 #include "io/pass_agreement.h"
 #include "io/views.h"
+#include "log.h"
 #include "parallel.h"
-#include "ssgi/color.h"
-#include "ssgi/error.h"
-#include "ssgi/io.h"
-#include "ssgi/log.h"
+#include "ssgi/plan.h"
+#include "throw.h"
 
 namespace ssgi {
 namespace {
@@ -645,6 +648,40 @@ SequenceInfo open_sequence(const InputOptions& options, bool check_header_camera
 SequenceInfo open_sequence(const InputOptions& options) {
   SequenceInfo seq = open_sequence(options, true);
   if (!options.views.empty()) seq.views = detail::open_views(seq, options);
+  return seq;
+}
+
+std::shared_ptr<const SequenceInfo> still_sequence(const GBuffer& frame) {
+  const Box2i& window = frame.data_window;
+  if (window.empty()) throw_usage("still_sequence: the frame's data window is empty");
+  auto check = [&](const Image& pass, Role role, int channels) {
+    if (pass.channels() == channels && pass.width() == window.width() &&
+        pass.height() == window.height())
+      return;
+    throw_usage(std::string("still_sequence: the ") + role_name(role) + " pass must have " +
+                std::to_string(channels) + " channel(s) of " + std::to_string(window.width()) +
+                " x " + std::to_string(window.height()) + " (the data window), not " +
+                std::to_string(pass.channels()) + " of " + std::to_string(pass.width()) + " x " +
+                std::to_string(pass.height()));
+  };
+  auto seq = std::make_shared<SequenceInfo>();
+  seq->layout.preset = *find_layout_preset("custom");
+  seq->layout.preset.direct_includes_albedo = true;  // GBuffer::direct is the reflected light
+  seq->layout.detected_because = "a frame given as buffers";
+  auto provide = [&](const Image& pass, Role role, int channels) {
+    check(pass, role, channels);
+    seq->layout.roles[static_cast<int>(role)] = {{0, role_name(role)}};
+  };
+  provide(frame.depth, Role::kDepth, 1);
+  provide(frame.normal, Role::kNormal, 3);
+  provide(frame.albedo, Role::kAlbedo, 3);
+  provide(frame.direct, Role::kDirect, 3);
+  if (!frame.emission.empty()) provide(frame.emission, Role::kEmission, 3);
+  if (!frame.beauty.empty()) provide(frame.beauty, Role::kBeauty, 4);
+  seq->pattern.prefix = frame.path;
+  seq->frames = seq->frames_on_disk = {frame.frame};
+  seq->display_window = frame.display_window;
+  seq->data_window = window;
   return seq;
 }
 

@@ -1,4 +1,6 @@
 // Writing result frames: our layers plus the input's channels and header, atomically.
+#include "io/frame_writer.h"
+
 #include <Imath/half.h>
 #include <OpenImageIO/imageio.h>
 #include <unistd.h>
@@ -11,11 +13,11 @@
 #include <memory>
 #include <set>
 
+#include "buffers.h"
 #include "io/input_frame.h"
 #include "io/oiio_files.h"
-#include "ssgi/error.h"
-#include "ssgi/io.h"
-#include "ssgi/log.h"
+#include "log.h"
+#include "throw.h"
 
 namespace ssgi {
 namespace {
@@ -91,37 +93,6 @@ void interleave_host_rows(const std::vector<const float*>& ours, bool half,
 }
 
 }  // namespace
-
-std::string parse_compression(const std::string& spec) {
-  const auto colon = spec.find(':');
-  const std::string name = spec.substr(0, colon);
-  static const std::set<std::string> kKnown = {"none",  "rle", "zips", "zip",  "piz",
-                                               "pxr24", "b44", "b44a", "dwaa", "dwab"};
-  if (!kKnown.count(name))
-    throw_usage("unknown --compression '" + spec +
-                "' (none, rle, zips, zip, piz, pxr24, b44, b44a, dwaa[:level], dwab[:level])");
-  if (colon != std::string::npos) {
-    if (name != "dwaa" && name != "dwab")
-      throw_usage("--compression '" + spec + "': only dwaa and dwab take a level");
-    const std::string level = spec.substr(colon + 1);
-    char* end = nullptr;
-    const double v = std::strtod(level.c_str(), &end);
-    if (level.empty() || *end != '\0' || !(v > 0) || v > 1e6)
-      throw_usage("--compression '" + spec + "': the level must be a positive number");
-  }
-  return spec;
-}
-
-std::string parse_layer_prefix(const std::string& prefix) {
-  std::string p = prefix;
-  if (!p.empty() && p.back() == '.') p.pop_back();
-  bool ok = !p.empty() && p.front() != '.' && p.find("..") == std::string::npos;
-  for (char c : p) ok = ok && c > ' ' && c < 127;
-  if (!ok)
-    throw_usage("--layer-prefix '" + prefix +
-                "' is not a layer name (dot-separated names without spaces, e.g. ssgi)");
-  return p + ".";
-}
 
 void check_output_directory(const std::string& path) {
   const fs::path dir = fs::absolute(path).parent_path();

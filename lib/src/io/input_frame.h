@@ -1,6 +1,6 @@
-// A frame's input read for a run (internal): the G-buffer the pipeline works on, and the input's
-// headers, from which the writer copies the output's header (the passed-through channels it
-// reads from the file again).
+// A frame's input read for a run (internal): its camera, the G-buffer the pipeline works on,
+// and the input's headers, from which the writer copies the output's header (the
+// passed-through channels it reads from the file again).
 #pragma once
 
 #include <algorithm>
@@ -10,9 +10,18 @@
 #include <vector>
 
 #include "io/oiio_files.h"
-#include "ssgi/color.h"
+#include "io/sequence_info.h"
 #include "ssgi/gbuffer.h"
 #include "ssgi/io.h"
+
+namespace ssgi {
+
+class ColorManagement;
+
+// The camera of one frame, from its header alone (or the options' sidecar / field of view).
+Camera read_camera(const SequenceInfo& sequence, int frame, const InputOptions& options);
+
+}  // namespace ssgi
 
 namespace ssgi::detail {
 
@@ -56,11 +65,5 @@ inline void copy_window(const Image& src, const Box2i& src_window, Image* dst,
                   dst->plane(c) + static_cast<std::size_t>(y - dst_window.y0) * dst->width() +
                       (x0 - dst_window.x0));
 }
-
-// write_frame from the input as read: its header, and with passthrough its channels, read again
-// from its file strip by strip.
-void write_frame(const std::string& path, const GBuffer& frame,
-                 const std::vector<OutputLayer>& layers, const WriteOptions& options,
-                 const DecodedInput& input);
 
 }  // namespace ssgi::detail

@@ -1,6 +1,6 @@
 // Channel layout presets, their detection from channel names and header attributes, and
 // --channel overrides.
-#include "ssgi/layout.h"
+#include "io/layout.h"
 
 #include <OpenImageIO/strutil.h>
 
@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "io/layout_presets.h"
-#include "ssgi/error.h"
+#include "throw.h"
 
 namespace ssgi {
 namespace {

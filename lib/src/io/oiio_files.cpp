@@ -8,7 +8,8 @@
 #include <limits>
 #include <numeric>
 
-#include "ssgi/error.h"
+#include "buffers.h"
+#include "throw.h"
 
 namespace ssgi::detail {
 

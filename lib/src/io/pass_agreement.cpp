@@ -8,6 +8,7 @@
 #include <limits>
 #include <vector>
 
+#include "io/camera.h"
 #include "parallel.h"
 
 namespace ssgi::detail {

@@ -7,9 +7,9 @@
 #include <cstddef>
 #include <string>
 
+#include "io/layout.h"
 #include "ssgi/camera.h"
 #include "ssgi/image.h"
-#include "ssgi/layout.h"
 
 namespace ssgi::detail {
 

@@ -8,7 +8,7 @@
 #include <filesystem>
 
 #include "io/oiio_files.h"
-#include "ssgi/error.h"
+#include "throw.h"
 
 namespace ssgi::detail {
 

@@ -5,7 +5,7 @@
 #include <utility>
 #include <vector>
 
-#include "ssgi/color.h"
+#include "io/color.h"
 #include "ssgi/gbuffer.h"
 
 namespace ssgi::detail {

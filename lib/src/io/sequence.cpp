@@ -1,5 +1,5 @@
 // Image-sequence patterns and frame lists in the manner of oiiotool.
-#include "ssgi/sequence.h"
+#include "io/sequence.h"
 
 #include <algorithm>
 #include <cstdint>
@@ -12,7 +12,7 @@
 #include <system_error>
 #include <unordered_set>
 
-#include "ssgi/error.h"
+#include "throw.h"
 
 namespace ssgi {
 namespace {

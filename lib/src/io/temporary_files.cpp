@@ -14,7 +14,7 @@
 #include <system_error>
 #include <vector>
 
-#include "ssgi/error.h"
+#include "throw.h"
 
 namespace ssgi {
 namespace {

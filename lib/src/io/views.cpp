@@ -6,10 +6,10 @@
 #include <limits>
 
 #include "io/input_frame.h"
+#include "io/sequence.h"
+#include "log.h"
 #include "parallel.h"
-#include "ssgi/error.h"
-#include "ssgi/log.h"
-#include "ssgi/sequence.h"
+#include "throw.h"
 
 namespace ssgi {
 

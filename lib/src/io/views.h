@@ -9,7 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "ssgi/color.h"
+#include "io/color.h"
+#include "io/sequence_info.h"
 #include "ssgi/gbuffer.h"
 #include "ssgi/io.h"
 

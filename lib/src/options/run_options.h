@@ -1,12 +1,13 @@
 // The options of `ssgi run`, `ssgi info`, `ssgi reference`, `ssgi sweep` and `ssgi preview`, parsed
-// with getopt_long from option_table.h.
+// with getopt_long from options/option_table.h.
 #pragma once
 
 #include <functional>
 #include <string>
 #include <vector>
 
-#include "option_table.h"
+#include "options/option_table.h"
+#include "settings.h"
 #include "ssgi/run.h"
 
 namespace ssgi_cli {
@@ -51,5 +52,14 @@ void install_log_handler(bool verbose, bool quiet,
 
 // Warnings about option choices (lossy compression), once the log handler is installed.
 void warn_about_options(const CommonOptions& options);
+
+// Validates --compression (zip|zips|piz|rle|pxr24|b44|b44a|dwaa[:level]|dwab[:level]|none) and
+// returns OIIO's spelling. Throws Error(kUsage) otherwise.
+std::string parse_compression(const std::string& spec);
+
+// Validates --layer-prefix (one or more dot-separated names, e.g. "ssgi" or "gi.v2", each of
+// printable characters other than space) and returns it with its trailing '.'. Throws
+// Error(kUsage) otherwise.
+std::string parse_layer_prefix(const std::string& prefix);
 
 }  // namespace ssgi_cli

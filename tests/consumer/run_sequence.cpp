@@ -1,5 +1,5 @@
 // The README's library example, built against an installed ssgi: what `ssgi run` writes, from a
-// program, through the sequence processor (run_sequence).
+// program, through the sequence processor (run_sequence). Fails unless every frame is written.
 #include <cstdio>
 
 #include "ssgi/run.h"
@@ -9,7 +9,8 @@
 
 int main(int argc, char** argv) {
   if (argc != 3) {
-    std::fprintf(stderr, "usage: consumer INPUT OUTPUT (e.g. shot.####.exr out/shot.####.exr)\n");
+    std::fprintf(stderr,
+                 "usage: run_sequence INPUT OUTPUT (e.g. shot.####.exr out/shot.####.exr)\n");
     return 2;
   }
   const ssgi::ThreadLimit threads(0);  // the scheduler's allocation, else the machine's CPUs
@@ -26,7 +27,7 @@ int main(int argc, char** argv) {
     const ssgi::RunReport report = ssgi::run_sequence(options, callbacks);
     std::printf("ssgi %s: %d of %d frames failed\n", ssgi::version(), report.failed(),
                 report.total);
-    return report.failed() == 0 ? 0 : 1;
+    return report.total > 0 && report.failed() == 0 ? 0 : 1;
   } catch (const ssgi::Error& e) {  // the whole run: bad options, no frames, over --max-memory
     std::fprintf(stderr, "%s: %s\n", e.file().c_str(), e.what());
     return 1;

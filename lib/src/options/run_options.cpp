@@ -1,4 +1,4 @@
-#include "run_options.h"
+#include "options/run_options.h"
 
 #include <OpenImageIO/strutil.h>
 
@@ -7,15 +7,15 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <set>
 #include <sstream>
 #include <vector>
 
-#include "fast_malloc.h"
+#include "log.h"
 #include "memory.h"
+#include "settings.h"
 #include "simd.h"
-#include "ssgi/error.h"
-#include "ssgi/io.h"
-#include "ssgi/log.h"
+#include "throw.h"
 
 namespace ssgi_cli {
 namespace {
@@ -299,7 +299,7 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
         o.run.frames_in_flight = static_cast<int>(parse_long("frames-in-flight", a, 1, 3));
         break;
       case kCompression:
-        o.run.write.compression = ssgi::parse_compression(a);
+        o.run.write.compression = parse_compression(a);
         break;
       case kDatatype: {
         const std::string t = a;
@@ -327,7 +327,7 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
         break;
       }
       case kLayerPrefix:
-        o.run.write.layer_prefix = ssgi::parse_layer_prefix(a);
+        o.run.write.layer_prefix = parse_layer_prefix(a);
         break;
       case kPresets: {
         o.presets.clear();
@@ -408,7 +408,6 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
     ssgi::throw_usage("-v (--verbose) and -q (--quiet) contradict each other");
   if (o.help) return o;
   if (o.run.memory_limit.bytes == 0) o.run.memory_limit = ssgi::scheduler_memory_limit();
-  keep_no_freed_blocks();
   // The kernels' target: --simd, else SSGI_SIMD (a bad value of either is a usage error here).
   const bool simd_given = !o.simd.empty();
   if (!simd_given && std::getenv("SSGI_SIMD") != nullptr) o.simd = std::getenv("SSGI_SIMD");
@@ -465,6 +464,38 @@ void install_log_handler(bool verbose, bool quiet,
 void warn_about_options(const CommonOptions& o) {
   if (o.run.write.compression.rfind("dwa", 0) == 0)
     ssgi::log_warning("DWA compression is lossy on channels named R, G, B (ssgi's outputs too)");
+}
+
+std::string parse_compression(const std::string& spec) {
+  const auto colon = spec.find(':');
+  const std::string name = spec.substr(0, colon);
+  static const std::set<std::string> kKnown = {"none",  "rle", "zips", "zip",  "piz",
+                                               "pxr24", "b44", "b44a", "dwaa", "dwab"};
+  if (!kKnown.count(name))
+    ssgi::throw_usage(
+        "unknown --compression '" + spec +
+        "' (none, rle, zips, zip, piz, pxr24, b44, b44a, dwaa[:level], dwab[:level])");
+  if (colon != std::string::npos) {
+    if (name != "dwaa" && name != "dwab")
+      ssgi::throw_usage("--compression '" + spec + "': only dwaa and dwab take a level");
+    const std::string level = spec.substr(colon + 1);
+    char* end = nullptr;
+    const double v = std::strtod(level.c_str(), &end);
+    if (level.empty() || *end != '\0' || !(v > 0) || v > 1e6)
+      ssgi::throw_usage("--compression '" + spec + "': the level must be a positive number");
+  }
+  return spec;
+}
+
+std::string parse_layer_prefix(const std::string& prefix) {
+  std::string p = prefix;
+  if (!p.empty() && p.back() == '.') p.pop_back();
+  bool ok = !p.empty() && p.front() != '.' && p.find("..") == std::string::npos;
+  for (char c : p) ok = ok && c > ' ' && c < 127;
+  if (!ok)
+    ssgi::throw_usage("--layer-prefix '" + prefix +
+                      "' is not a layer name (dot-separated names without spaces, e.g. ssgi)");
+  return p + ".";
 }
 
 }  // namespace ssgi_cli

@@ -8,10 +8,11 @@
 #include <vector>
 
 #include "ssgi/image.h"
-#include "ssgi/io.h"
 #include "ssgi/settings.h"
 
 namespace ssgi {
+
+struct SequenceInfo;
 
 class ColorManagement {
  public:

@@ -1,11 +1,12 @@
-#include "option_table.h"
+#include "options/option_table.h"
 
 #include <OpenImageIO/strutil.h>
 
 #include <cstring>
 #include <sstream>
 
-#include "ssgi/error.h"
+#include "settings.h"
+#include "throw.h"
 
 namespace ssgi_cli {
 namespace {

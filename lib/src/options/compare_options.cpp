@@ -1,5 +1,7 @@
 // ssgi compare's options: idiff's, spelled as idiff spells them, and ssgi's, in one table that
 // makes both the getopt_long_only table and --help.
+#include "options/compare_options.h"
+
 #include <getopt.h>
 
 #include <algorithm>
@@ -8,12 +10,11 @@
 #include <cstdlib>
 #include <limits>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
-#include "compare_command.h"
-#include "ssgi/compare.h"
-#include "ssgi/error.h"
+#include "throw.h"
 
 namespace ssgi_cli {
 namespace {
@@ -212,6 +213,32 @@ std::vector<std::string> split_commas(const std::string& list) {
 }  // namespace
 
 // Returns nullopt after printing --help.
+std::vector<ssgi::Metric> parse_metric_list(const std::string& list) {
+  std::vector<ssgi::Metric> metrics;
+  auto add = [&](ssgi::Metric m) {
+    if (std::find(metrics.begin(), metrics.end(), m) == metrics.end()) metrics.push_back(m);
+  };
+  std::stringstream stream(list);
+  std::string name;
+  bool any = false;
+  while (std::getline(stream, name, ',')) {
+    any = true;
+    bool known = false;
+    for (int i = 0; i < ssgi::kMetricCount; ++i) {
+      const ssgi::Metric m = static_cast<ssgi::Metric>(i);
+      if (name == "all" || name == ssgi::metric_name(m)) {
+        add(m);
+        known = true;
+      }
+    }
+    if (!known)
+      ssgi::throw_usage("unknown metric '" + name + "' in '" + list +
+                        "' (rmse, relrmse, relmse, psnr, ssim, all)");
+  }
+  if (!any) ssgi::throw_usage("empty metric list");
+  return metrics;
+}
+
 std::optional<CompareArgs> parse_compare_args(int argc, char** argv) {
   constexpr float kInf = std::numeric_limits<float>::infinity();
   const std::vector<option> table = getopt_table();
@@ -284,7 +311,7 @@ std::optional<CompareArgs> parse_compare_args(int argc, char** argv) {
         args.frames = optarg;
         break;
       case kOptMetric:
-        args.metrics = ssgi::parse_metric_list(optarg);
+        args.metrics = parse_metric_list(optarg);
         break;
       case kOptDepthChannel:
         args.file.depth_channel = optarg;
