@@ -16,6 +16,7 @@
 
 #include "compare/compare.h"
 #include "fixture_frame.h"
+#include "frame_stages.h"
 #include "gi/composite.h"
 #include "gi/directions.h"
 #include "gi/gather.h"
@@ -304,7 +305,7 @@ TEST(Reference, BoundedHitsGiveTheLightOfAllHitsHeld) {
   }
   // And the pipeline's reference with a budget of no rows is the one with the default.
   const Image by_default = indirect(f, s);
-  const Image no_rows_kept = Pipeline(f.seq, s, {0}).indirect_light(f.g);
+  const Image no_rows_kept = detail::FrameStages(f.seq, s, PipelineMemory{0}).indirect_light(f.g);
   EXPECT_EQ(by_default.data(), no_rows_kept.data());
 }
 

@@ -7,9 +7,8 @@
 
 namespace ssgi {
 
-Pipeline::Pipeline(const SequenceInfo& sequence, const GiSettings& settings,
-                   const PipelineMemory& memory)
-    : stages_(std::make_unique<detail::FrameStages>(sequence, settings, memory)) {}
+Pipeline::Pipeline(const SequenceInfo& sequence, const GiSettings& settings)
+    : stages_(std::make_unique<detail::FrameStages>(sequence, settings)) {}
 
 Pipeline::~Pipeline() = default;
 

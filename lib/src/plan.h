@@ -1,6 +1,7 @@
 // The plan: which stages run and which channels are read, from the inputs and the settings.
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,23 @@ struct Plan {
   bool views = false;                // missed rays continued in the shot's views (--view) first
   std::vector<std::string> reasons;  // one line per decision, for `ssgi info` and -v
   std::vector<std::string> warnings;  // what `ssgi run` and `ssgi info` warn about, one line each
+};
+
+// What the pipeline and a run may hold besides the frames' planes (a run chooses it for its
+// memory limit). It does not change the light.
+struct PipelineMemory {
+  // The bytes of hits (4 a ray) the Embree reference keeps for the bounces after the first; the
+  // rows beyond them are traced again for each bounce.
+  std::size_t reference_hits_bytes = std::size_t{1} << 30;
+  // Frames read, lit and written at once: 3 reads the next and writes the last while lighting
+  // one, 2 overlaps two of those, 1 does one after the other.
+  int frames_in_flight = 2;
+  // The window's frames waiting for their later neighbours hold only their light on the trace
+  // grid and are decoded again to be finished: the least memory, the same bits.
+  bool read_twice = false;
+  // A frame's passes are read after its composite (a callback, the preview), which is then
+  // written beside them rather than over them.
+  bool passes_read_after_composite = false;
 };
 
 // Decides the plan for `sequence` under `settings`. Throws Error(kUsage) for a setting out of

@@ -19,23 +19,21 @@ class FrameStages;
 class Pipeline {
  public:
   // Loads what the whole run shares (the colour config and its processors, the environment
-  // map); `memory` bounds what the reference keeps. Throws ssgi::Error.
-  Pipeline(const SequenceInfo& sequence, const GiSettings& settings,
-           const PipelineMemory& memory = {});
+  // map). Throws ssgi::Error.
+  Pipeline(const SequenceInfo& sequence, const GiSettings& settings);
   ~Pipeline();
   Pipeline(const Pipeline&) = delete;
   Pipeline& operator=(const Pipeline&) = delete;
 
   const Plan& plan() const;
   const GiSettings& settings() const;
-  // The run's colour spaces: read_gbuffer takes it, and the outputs go through it.
+  // The run's colour spaces: the inputs are read into them, and the outputs go through them.
   const ColorManagement& color() const;
 
   // The frame's indirect light (3 channels) without temporal filtering; with `coverage`, its
   // coverage at the frame's resolution too (FrameResult::coverage). With `views` (the frame's
-  // views of the sequence's --view options, as read_views gives them, each numbered with the
-  // frame's number, which seeds its noise), its missed rays continue in them when the plan says
-  // so (Plan::views).
+  // views of the sequence's --view options, each numbered with the frame's number, which seeds
+  // its noise), its missed rays continue in them when the plan says so (man ssgi-gi, VIEWS).
   Image indirect_light(const GBuffer& frame, Image* coverage = nullptr,
                        const std::vector<GBuffer>* views = nullptr) const;
 

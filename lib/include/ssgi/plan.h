@@ -1,7 +1,6 @@
-// What a frame's pipeline is made from (its sequence, what it may hold) and a run's memory limit.
+// What a frame's pipeline is made from (its sequence) and a run's memory limit.
 #pragma once
 
-#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -24,23 +23,6 @@ class ColorManagement;
 
 // What a run does (the stages, the passes read), decided once; opaque to programs.
 struct Plan;
-
-// What the pipeline and a run may hold besides the frames' planes (a run chooses it for its
-// memory limit). It does not change the light.
-struct PipelineMemory {
-  // The bytes of hits (4 a ray) the Embree reference keeps for the bounces after the first; the
-  // rows beyond them are traced again for each bounce.
-  std::size_t reference_hits_bytes = std::size_t{1} << 30;
-  // Frames read, lit and written at once: 3 reads the next and writes the last while lighting
-  // one, 2 overlaps two of those, 1 does one after the other.
-  int frames_in_flight = 2;
-  // The window's frames waiting for their later neighbours hold only their light on the trace
-  // grid and are decoded again to be finished: the least memory, the same bits.
-  bool read_twice = false;
-  // A frame's passes are read after its composite (a callback, the preview), which is then
-  // written beside them rather than over them.
-  bool passes_read_after_composite = false;
-};
 
 // A memory limit and what set it; bytes 0: none.
 struct MemoryLimit {
