@@ -13,9 +13,8 @@ constexpr std::size_t kHugePage = std::size_t{2} << 20;
 constexpr std::size_t kLargeBlock = std::size_t{1} << 20;
 
 // The bytes allocate_block takes for a block of `bytes`: whole huge pages where the last one
-// would be at least half used, so that it is a huge page too (a 1080p plane, 7.9 MiB, ends
-// 1.9 MiB into its fourth); otherwise `bytes`, its tail left in 4 KB pages (a 2K plane,
-// 8.4 MiB, would take a fifth more memory for its last 0.4 MiB).
+// would be at least half used, so that it is a huge page too; otherwise `bytes`, its tail left
+// in 4 KB pages, so that no block takes more than half a huge page beyond its size.
 std::size_t block_bytes(std::size_t bytes) {
   const std::size_t tail = bytes % kHugePage;
   return tail >= kHugePage / 2 ? bytes - tail + kHugePage : bytes;
@@ -23,10 +22,9 @@ std::size_t block_bytes(std::size_t bytes) {
 
 }  // namespace
 
-// Each 4 KB page a buffer's first touch faults costs the kernel microseconds: on a two-core
-// virtual machine 20 us, 45 ms to fill a 16.6 MB block in 4 KB pages against 1.3 ms in huge
-// ones, and a rendered 1080p shot's GI time 0.64x on one thread and 0.72x on two
-// (tests/bench/README.md, "Huge pages"). Only the 2 MB pages inside the block are advised, so
+// Each 4 KB page a buffer's first touch faults costs the kernel time, and a frame-sized buffer
+// spans thousands of them; in 2 MB pages it faults 512 times less often (what that saves:
+// tests/bench/README.md, "Huge pages"). Only the 2 MB pages inside the block are advised, so
 // that nothing outside it is made resident; a kernel whose transparent huge pages are off
 // ignores the advice.
 void* allocate_block(std::size_t bytes) {
