@@ -139,12 +139,9 @@ void FrameStages::continue_in_views(FrameTrace* t, const LitViews& views, bool k
   std::vector<ContinuationSource> sources;
   for (std::size_t i = 0; i < views.traces.size(); ++i)
     sources.push_back({views.traces[i].get(), &views.light[i]});
-  Continuation continued = continue_missed_rays(
-      *t, take_shares(&t->hits), sources, continuation_policy(ContinuationPolicy::Kind::kViews),
-      settings_, keep_missed);
+  const Continuation continued = continue_into(
+      t, sources, continuation_policy(ContinuationPolicy::Kind::kViews), settings_, keep_missed);
   log_info(continued.report.describe(t->frame));
-  put_shares(std::move(continued.shares), &t->hits);
-  if (continued.walked) t->missed = std::move(continued.left);
 }
 
 Image FrameStages::gather(const FrameTrace& t, Image* coverage, CubeLight* cube,
@@ -198,11 +195,9 @@ LitViews FrameStages::light_views(const std::vector<GBuffer>& views) const {
           others.push_back({out.traces[j].get(), &out.light[j]});
       FrameTrace& t = *out.traces[i];
       if (pass == 0) {
-        Continuation c = continue_missed_rays(t, take_shares(&t.hits), others,
-                                              continuation_policy(ContinuationPolicy::Kind::kViews),
-                                              settings_, false, true);
-        put_shares(std::move(c.shares), &t.hits);
-        if (c.walked) t.missed = MissedRays();
+        Continuation c =
+            continue_into(&t, others, continuation_policy(ContinuationPolicy::Kind::kViews),
+                          settings_, false, true);
         found[i] = std::move(c.found);
         continued[i] = c.changed();
       } else if (continued[i]) {
@@ -322,7 +317,7 @@ std::optional<ContinuedLight> FrameStages::continue_in_window(
   if (!continued.changed()) return std::nullopt;  // nothing changes: no need to gather again
   ContinuedLight out;
   out.light = denoise_on_grid(g, gather(self, &out.coverage, nullptr, &continued.shares));
-  if (plan_.temporal == TemporalMode::kWindow && continued.shares.cube.channels() == kCubeFaces)
+  if (continued.shares.cube.channels() == kCubeFaces)
     out.miss_shares = denoise_on_grid(g, grouped_shares(continued.shares.cube));
   return out;
 }

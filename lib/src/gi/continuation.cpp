@@ -527,10 +527,7 @@ Continuation continue_missed_rays(const FrameTrace& self, MissShares shares,
       const std::uint32_t first = self.missed.begin[s], end = self.missed.begin[s + 1];
       if (first == end) continue;
       const Imath::V3f o = self.missed.origin[s];
-      for (std::size_t i = 0; i < count; ++i) {
-        origin_in[i] = sources[i].from_center.point(o);
-        if (policy.nearest) sides_at[i] = frusta[i].at(o, o.z);
-      }
+      bool placed = false;  // origin_in and sides_at hold this sample's, once a ray needs them
       ContinuedSample sample;
       for (std::uint32_t k = first; k < end; ++k) {
         const MissedRay& ray = self.missed.rays[k];
@@ -545,6 +542,13 @@ Continuation continue_missed_rays(const FrameTrace& self, MissShares shares,
           continue;
         }
         ++row_rays;
+        if (!placed) {
+          for (std::size_t i = 0; i < count; ++i) {
+            origin_in[i] = sources[i].from_center.point(o);
+            if (policy.nearest) sides_at[i] = frusta[i].at(o, o.z);
+          }
+          placed = true;
+        }
         const float jitter = ray_jitter(s, k - first, self.frame, settings.seed);
         // The sources to march in: with `nearest`, those the ray passes through, in the order it
         // enters them: a surface a view shows lies within the part of the ray inside its
@@ -649,7 +653,6 @@ Continuation continue_missed_rays(const FrameTrace& self, MissShares shares,
   r.refused = refused;
   if (keep_missed) {
     // The rays left, in trace-sample order.
-    out.left.origin = self.missed.origin;
     join_rows(
         grid, row_left,
         [&](int by, int bx) { return left_count[static_cast<std::size_t>(by) * grid.width + bx]; },
@@ -661,6 +664,19 @@ Continuation continue_missed_rays(const FrameTrace& self, MissShares shares,
         [&](int by, int bx) { return found_count[static_cast<std::size_t>(by) * grid.width + bx]; },
         &out.found.begin, &out.found.hits);
   return out;
+}
+
+Continuation continue_into(FrameTrace* t, const std::vector<ContinuationSource>& sources,
+                           const ContinuationPolicy& policy, const GiSettings& settings,
+                           bool keep_missed, bool record_found) {
+  Continuation c = continue_missed_rays(*t, take_shares(&t->hits), sources, policy, settings,
+                                        keep_missed, record_found);
+  put_shares(std::move(c.shares), &t->hits);
+  if (c.walked) {
+    if (keep_missed) c.left.origin = std::move(t->missed.origin);
+    t->missed = std::move(c.left);
+  }
+  return c;
 }
 
 Image source_light(const FrameTrace& self, const SourceHits& found,

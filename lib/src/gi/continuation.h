@@ -154,7 +154,9 @@ struct Continuation {
   // The shares given, with the found rays' (and those reaching the sky) taken out, the light
   // they brought added to `continued_light`, the sky's light to `env`.
   MissShares shares;
-  MissedRays left;   // with `keep_missed`: the rays still missed, for other sources to continue
+  // With `keep_missed`: the rays still missed, for other sources to continue (their begin and
+  // rays; their origins are the frame's own).
+  MissedRays left;
   SourceHits found;  // with `record_found`: which source sample each found ray met
   ContinuationReport report;
   // Whether any ray met a surface, reached the sky or took a surface where it was last seen.
@@ -169,6 +171,12 @@ Continuation continue_missed_rays(const FrameTrace& self, MissShares shares,
                                   const std::vector<ContinuationSource>& sources,
                                   const ContinuationPolicy& policy, const GiSettings& settings,
                                   bool keep_missed = false, bool record_found = false);
+
+// continue_missed_rays on `t`'s own shares, put back into it with the rays still missed (none
+// without `keep_missed`); returns the report and the found rays, its shares moved into `t`.
+Continuation continue_into(FrameTrace* t, const std::vector<ContinuationSource>& sources,
+                           const ContinuationPolicy& policy, const GiSettings& settings,
+                           bool keep_missed = false, bool record_found = false);
 
 // The light the rays `found` (continue_missed_rays, on `self`'s trace grid) bring from the same
 // sources with their light now `light` (per source): what the continuation added to
