@@ -111,9 +111,9 @@ std::vector<Step> plan_steps(const SequenceInfo& seq, const ShotParts& parts, Te
           for (int f : disk)
             if (parts.in_window(f, n, radius) && ring.insert(f).second) steps.push_back({f, i});
           if (read_twice) {
-            Step again{n, i};
-            again.reread = true;
-            steps.push_back(again);
+            Step second{n, i};
+            second.reread = true;
+            steps.push_back(second);
           }
           break;
         case TemporalMode::kEma: {
