@@ -13,7 +13,9 @@
 # Environment: SSGI_TRAINING_CACHE (default ~/.cache/ssgi/training), SSGI_TRAINING_SAMPLES
 # (default 256), SSGI_TRAINING_RESOLUTION (WxH, default 320x180), SSGI_TRAINING_FRAMES
 # (default 8), SSGI_TRAINING_SEED (Cycles' sampling seed, default 0: another seed renders the same
-# frames with independent noise, into its own cache), BLENDER (default blender). Needs
+# frames with independent noise, into its own cache), SSGI_TRAINING_GUIDE (1: render the frames
+# as a guide for ssgi --guide, scenes.py --guide: the samples as given, a seed per frame; into a
+# cache of its own), BLENDER (default blender). Needs
 # blender 3.4, oiiotool, python3.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
@@ -23,23 +25,29 @@ blender=${BLENDER:-blender}
 resolution=${SSGI_TRAINING_RESOLUTION:-320x180}
 frames=${SSGI_TRAINING_FRAMES:-8}
 seed=${SSGI_TRAINING_SEED:-0}
+guide=()
+kind=
+if [ "${SSGI_TRAINING_GUIDE:-0}" = 1 ]; then
+  guide=(--guide)
+  kind=" guide"
+fi
 blender_run() {
   "$blender" -b --factory-startup --python-exit-code 1 -P "$here/scenes.py" -- "$@"
 }
 
-# rendered_as DIR: the resolution, frame count and seed DIR/camera.json says, as "WxH N seed S"
-# (seed 0 where it names none).
+# rendered_as DIR: the resolution, frame count and seed DIR/camera.json says, as "WxH N seed S",
+# with " guide" after it for a guide's frames (seed 0 where it names none).
 rendered_as() {
   python3 -c 'import json, sys; c = json.load(open(sys.argv[1]))
-print("%dx%d %d seed %d" % (c["width"], c["height"], len(c["frames"]), c.get("seed", 0)))' \
-    "$1/camera.json"
+print("%dx%d %d seed %d%s" % (c["width"], c["height"], len(c["frames"]), c.get("seed", 0),
+                              " guide" if c.get("animated_seed") else ""))' "$1/camera.json"
 }
 
 # complete DIR NAME: every frame present, readable to the last pixel, with its camera.
 complete() {
   local dir=$1 name=$2 f
   [ -f "$dir/camera.json" ] || return 1
-  [ "$(rendered_as "$dir")" = "$resolution $frames seed $seed" ] || return 1
+  [ "$(rendered_as "$dir")" = "$resolution $frames seed $seed$kind" ] || return 1
   for f in $(seq -f "$dir/$name.%04g.exr" 1 "$frames"); do
     [ -f "$f" ] || return 1
     iinfo --stats "$f" > /dev/null 2>&1 || return 1
@@ -80,8 +88,8 @@ for name in "${scenes[@]}"; do
   fi
   if [ -f "$cache/$name/camera.json" ]; then
     held=$(rendered_as "$cache/$name")
-    [ "$held" = "$resolution $frames seed $seed" ] || {
-      echo "render.sh: $cache/$name holds $held frames, not $resolution $frames seed $seed:" \
+    [ "$held" = "$resolution $frames seed $seed$kind" ] || {
+      echo "render.sh: $cache/$name holds $held frames, not $resolution $frames seed $seed$kind:" \
         "set SSGI_TRAINING_CACHE to another folder" >&2
       exit 1
     }
@@ -91,7 +99,7 @@ for name in "${scenes[@]}"; do
     "(log: $tmp/blender.log)" >&2
   start=$(date +%s)
   blender_run --scene "$name" --out "$tmp" --samples "$samples" --frames "$frames" \
-    --resolution "$resolution" --seed "$seed" > "$tmp/blender.log" 2>&1 || {
+    --resolution "$resolution" --seed "$seed" "${guide[@]}" > "$tmp/blender.log" 2>&1 || {
     echo "render.sh: $name failed, see $tmp/blender.log" >&2
     exit 1
   }

@@ -3,7 +3,8 @@
 Usage (Blender 3.4, headless):
   blender -b --factory-startup --python-exit-code 1 -P tests/accuracy/training/scenes.py -- \
       --scene NAME --out DIR [--samples N] [--frames N] [--resolution WxH] [--seed N] [--list]
-      [--no-render] [--panorama FRAME [--panorama-at camera|surfaces]] [--save FILE.blend]
+      [--no-render] [--guide] [--panorama FRAME [--panorama-at camera|surfaces]]
+      [--save FILE.blend]
 
 Builds scene NAME from primitives only (no assets), renders frames 1..N (default 8) into
 DIR/NAME.####.exr (Cycles CPU, N samples per pixel, default 256, times the scene's
@@ -20,6 +21,9 @@ camera.json only. --panorama FRAME renders instead what surrounds the camera at 
 same passes, from the camera's position or, with --panorama-at surfaces, from the mean position
 of the surfaces it sees, to DIR/NAME_panorama_AT.FRAME.exr (surroundings.sh). --save also writes
 the scene as built to FILE.blend (what ../../blender/render_views.py renders views of).
+--guide renders the frames as a guide for ssgi --guide is rendered: exactly --samples samples
+(no SAMPLES_FACTOR: a guide's point is its low count) and a sampling seed of its own per frame
+(Cycles' animated seed, --seed added), so that the temporal window averages independent noise.
 Materials are pure diffuse (Diffuse BSDF) with varied albedo; emitters are Emission shaders.
 """
 
@@ -611,6 +615,8 @@ def camera_json(scene, name, samples, frames, world):
     width, height = scene.render.resolution_x, scene.render.resolution_y
     out = {"scene": name, "width": width, "height": height, "spp": samples,
            "seed": scene.cycles.seed}
+    if scene.cycles.use_animated_seed:
+        out["animated_seed"] = True
     out.update(world)
     out["frames"] = []
     for f in range(1, frames + 1):
@@ -695,7 +701,7 @@ def main():
     flags = set()
     i = 0
     while i < len(argv):
-        if argv[i] in ("--list", "--no-render"):
+        if argv[i] in ("--list", "--no-render", "--guide"):
             flags.add(argv[i])
             i += 1
         elif (argv[i] in ("--scene", "--out", "--samples", "--frames", "--resolution", "--seed",
@@ -712,7 +718,8 @@ def main():
     if name not in SCENES or "--out" not in opts:
         raise SystemExit(f"scenes.py: need --scene ({', '.join(SCENES)}) and --out DIR")
     samples, frames, out_dir = int(opts["--samples"]), int(opts["--frames"]), opts["--out"]
-    samples *= SAMPLES_FACTOR.get(name, 1)
+    if "--guide" not in flags:
+        samples *= SAMPLES_FACTOR.get(name, 1)
     try:
         width, height = (int(v) for v in opts["--resolution"].split("x"))
     except ValueError:
@@ -722,6 +729,7 @@ def main():
     scene = bpy.context.scene
     render_settings(scene, samples, frames, width, height)
     scene.cycles.seed = int(opts["--seed"])
+    scene.cycles.use_animated_seed = "--guide" in flags
     world = SCENES[name][0](frames)
     os.makedirs(out_dir, exist_ok=True)
     if opts.get("--panorama-at", "camera") not in ("camera", "surfaces"):
