@@ -9,6 +9,7 @@
 #include "gi/continuation.h"
 #include "gi/denoise.h"
 #include "gi/gather.h"
+#include "gi/guide.h"
 #include "gi/march.h"
 #include "gi/slices.h"
 #include "log.h"
@@ -263,6 +264,53 @@ Image FrameStages::coverage_at_frame(const GBuffer& g, const GBuffer& grid,
                                      const Image& grid_coverage) const {
   return coverage_to_frame(grid_coverage, grid.depth, grid.normal, plan_.trace_scale,
                            static_cast<float>(settings_.thickness), g.depth);
+}
+
+GuideOnGrid FrameStages::guide_on_grid(const GBuffer& g, const GBuffer& grid,
+                                       const GuideFrame& guide) const {
+  return detail::guide_on_grid(g, grid, plan_.trace_scale, guide,
+                               static_cast<float>(settings_.thickness));
+}
+
+Image FrameStages::guided(const GBuffer& g, const std::vector<const TracedLight*>& window,
+                          int center, int radius, const Image& on_grid) const {
+  const TracedLight& own = *window[center];
+  GuideOnGrid guide;
+  if (window.size() == 1 || radius == 0) {
+    guide = own.guide;
+  } else {
+    // Each frame's mean where its guide is not known is its own light: no residual there.
+    std::vector<const GBuffer*> grids;
+    std::vector<Image> means;
+    std::vector<const Image*> mean, known, variance;
+    for (const TracedLight* t : window) {
+      grids.push_back(&t->grid);
+      Image m = t->guide.mean;
+      for (int c = 0; c < 3; ++c)
+        for (std::size_t p = 0; p < m.plane_size(); ++p)
+          if (t->guide.known.plane(c)[p] == 0) m.plane(c)[p] = t->light.plane(c)[p];
+      means.push_back(std::move(m));
+      known.push_back(&t->guide.known);
+      variance.push_back(&t->guide.variance);
+    }
+    for (const Image& m : means) mean.push_back(&m);
+    guide.mean = temporal_window(grids, mean, center, radius);
+    guide.known = temporal_window(grids, known, center, radius);
+    guide.variance = temporal_window(grids, variance, center, radius);
+    const float frames = static_cast<float>(window.size());
+    for (int c = 0; c < 3; ++c)
+      for (std::size_t p = 0; p < guide.variance.plane_size(); ++p)
+        guide.variance.plane(c)[p] /= frames;
+  }
+  GuideReport report;
+  Image out = guided_light(on_grid, guide, own.grid.depth, g.depth, g.normal,
+                           pyramid_level(plan_.trace_scale), settings_.denoise_settings, &report);
+  const auto percent = [](double v) { return std::to_string(std::lround(100 * v)) + "%"; };
+  log_info("frame " + std::to_string(g.frame) + ": guide: gives the light of " +
+           percent(report.known_share) + " of the trace samples; its residual brought " +
+           (report.residual_share >= 0 ? "+" : "") + percent(report.residual_share) +
+           " of the light, " + percent(report.detail_kept) + " of its detail kept as it is");
+  return out;
 }
 
 Image FrameStages::light_at_frame(const GBuffer& g, const Image& on_grid) const {

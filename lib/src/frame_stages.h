@@ -65,6 +65,17 @@ class FrameStages {
                                                    const std::vector<const TracedLight*>& window,
                                                    int center) const;
 
+  // Plan::guide: frame g's guide on its trace grid `grid` (TracedLight::grid), for the window.
+  GuideOnGrid guide_on_grid(const GBuffer& g, const GBuffer& grid, const GuideFrame& guide) const;
+
+  // Plan::guide: `on_grid` (the light of window[center], frame g, on its trace grid after the
+  // temporal stage) with the guides of `window` (TracedLight::guide, ascending frame order):
+  // their means, knowns and variances filtered over the window within `radius` frames as the
+  // light is (the variance over the frames averaged), then guided_light. -v reports what the
+  // guide brought.
+  Image guided(const GBuffer& g, const std::vector<const TracedLight*>& window, int center,
+               int radius, const Image& on_grid) const;
+
   // Light on the trace grid (temporally filtered or not) carried to the frame's resolution by
   // the denoiser's bilateral upsampling.
   Image light_at_frame(const GBuffer& frame, const Image& on_grid) const;

@@ -228,6 +228,21 @@ Plan make_plan(const SequenceInfo& seq, const GiSettings& s) {
           (plan.multiframe ? "; what they miss goes on to the other frames (multiframe)" : ""));
     }
   }
+  if (seq.guide) {
+    if (plan.temporal == TemporalMode::kEma)
+      throw_usage(
+          "--guide: the guide is filtered over the symmetric temporal window or over each frame "
+          "alone: use --temporal window or none with it, not ema");
+    plan.guide = true;
+    const int f = seq.guide->fraction;
+    plan.reasons.push_back(
+        "guide: " + seq.guide->pattern + " (" +
+        (f == 1 ? std::string("the shot's resolution") : "1/" + std::to_string(f) + " of it") +
+        "), its " + seq.guide->sequence->layout.preset.name +
+        " indirect light with ssgi's as its control variate: their difference filtered" +
+        (plan.temporal == TemporalMode::kWindow ? " over the window and" : "") +
+        " over the surface, kept as it is where it stands out of the guide's noise");
+  }
   plan.reasons.push_back("composite: direct + emission + albedo x indirect");
   return plan;
 }

@@ -20,9 +20,10 @@ struct Plan {
   bool env_map = false;          // misses look up an environment map
   bool denoise = false;
   TemporalMode temporal = TemporalMode::kNone;
-  int multiframe = 0;                // frames each side that missed rays are continued in (0: none)
-  bool views = false;                // missed rays continued in the shot's views (--view) first
-  std::vector<std::string> reasons;  // one line per decision, for `ssgi info` and -v
+  int multiframe = 0;  // frames each side that missed rays are continued in (0: none)
+  bool views = false;  // missed rays continued in the shot's views (--view) first
+  bool guide = false;  // the light is the control variate of a guide's (--guide, gi/guide.h)
+  std::vector<std::string> reasons;   // one line per decision, for `ssgi info` and -v
   std::vector<std::string> warnings;  // what `ssgi run` and `ssgi info` warn about, one line each
 };
 

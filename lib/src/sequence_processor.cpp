@@ -19,6 +19,7 @@
 #include "frame_stages.h"
 #include "gi/continuation.h"
 #include "gi/temporal.h"
+#include "io/guide.h"
 #include "io/sequence.h"
 #include "io/views.h"
 #include "log.h"
@@ -279,6 +280,12 @@ class Processor {
         if (s.read != kNoFrame && !s.reread) read.push_back(s.read);
       check_views_cover(seq_, read);
     }
+    if (stages_.plan().guide) {
+      std::vector<int> read;
+      for (const Step& s : steps_)
+        if (s.read != kNoFrame && !s.reread) read.push_back(s.read);
+      check_guide_covers(seq_, read);
+    }
     for (int i = 0; i < static_cast<int>(seq_.frames.size()); ++i)
       if (!job.reuse[i]) output_index_[seq_.frames[i]] = i;
   }
@@ -339,6 +346,8 @@ class Processor {
       d.frame = read_input_frame(seq_, step.read, roles, *job_.input, &stages_.color(), report);
       if (plan.views && !step.reread)
         d.frame->views = read_views(seq_, step.read, *job_.input, &stages_.color());
+      if (plan.guide && !step.reread)
+        d.frame->guide = read_guide(seq_, step.read, d.frame->g, *job_.input, &stages_.color());
     } catch (const Error& e) {
       d.error = error_of(e);
     } catch (const std::bad_alloc&) {
@@ -424,6 +433,10 @@ class Processor {
     const LitViews views = stages_.light_views(frame.views);
     frame.views.clear();
     TracedLight traced = stages_.grid_light(frame.g, &views);
+    if (stages_.plan().guide) {
+      traced.guide = stages_.guide_on_grid(frame.g, traced.grid, frame.guide);
+      frame.guide = GuideFrame();
+    }
     if (mode_ == TemporalMode::kEma) {
       if (s.restart) ema_valid_ = false;
       ema_step(parts_.index(s.read), std::move(traced));
@@ -500,8 +513,10 @@ class Processor {
       const std::optional<ContinuedLight> continued =
           stages_.plan().multiframe > 0 ? stages_.continue_in_window(*lit.g, traced, traced_center)
                                         : std::nullopt;
-      const Image filtered =
+      Image filtered =
           filter_window(lit_frames, center, radius_, continued ? &*continued : nullptr);
+      if (stages_.plan().guide)
+        filtered = stages_.guided(*lit.g, lit_frames, center, radius_, filtered);
       indirect = stages_.light_at_frame(*lit.g, filtered);
       coverage = stages_.coverage_at_frame(*lit.g, lit.traced.grid,
                                            continued ? continued->coverage : lit.traced.coverage);
@@ -522,6 +537,13 @@ class Processor {
       if (mode_ == TemporalMode::kEma) {
         indirect = stages_.light_at_frame(*g, ema_out_);
         coverage = stages_.coverage_at_frame(*g, ema_grid_, ema_coverage_);
+      } else if (stages_.plan().guide) {
+        // The guide's residual is filtered on the trace grid, as the window does.
+        TracedLight t = stages_.grid_light(*g, &views);
+        t.guide = stages_.guide_on_grid(*g, t.grid, own->guide);
+        own->guide = GuideFrame();
+        indirect = stages_.light_at_frame(*g, stages_.guided(*g, {&t}, 0, 0, t.light));
+        coverage = stages_.coverage_at_frame(*g, t.grid, t.coverage);
       } else {
         indirect = stages_.indirect_light(*g, &coverage, &views);
       }

@@ -23,14 +23,18 @@ struct GBuffer {
   // the blender layout says"; empty when the normals are not read from a pass.
   std::string normals_source;
 
-  Image depth;                // 1: planar camera-space z; +inf where there is no surface
-  Image normal;               // 3: unit camera-space normal; 0 where there is no surface
-  Image albedo;               // 3: diffuse albedo
-  Image direct;               // 3: direct light the surface reflects (albedo included)
-  Image emission;             // 3 or absent
-  Image motion_prev;          // 2 or absent: display pixels, +y down, to the point in frame - 1
-  Image motion_next;          // 2 or absent: the same to frame + 1
-  Image beauty;               // 4 or absent: the renderer's composite, alpha in channel 3
+  Image depth;        // 1: planar camera-space z; +inf where there is no surface
+  Image normal;       // 3: unit camera-space normal; 0 where there is no surface
+  Image albedo;       // 3: diffuse albedo
+  Image direct;       // 3: direct light the surface reflects (albedo included)
+  Image emission;     // 3 or absent
+  Image motion_prev;  // 2 or absent: display pixels, +y down, to the point in frame - 1
+  Image motion_next;  // 2 or absent: the same to frame + 1
+  Image beauty;       // 4 or absent: the renderer's composite, alpha in channel 3
+  // 3 or absent: the renderer's diffuse indirect light as FrameResult::indirect is, without
+  // albedo (a guide's, read only where asked for); a pass that includes the albedo is divided
+  // by it, and is 0 where the albedo is.
+  Image indirect;
   std::size_t sanitized = 0;  // NaN or infinite values of the colour and normal passes, read as 0
 
   int width() const { return data_window.width(); }
@@ -39,7 +43,7 @@ struct GBuffer {
   bool is_surface(int x, int y) const { return std::isfinite(depth.at(0, x, y)); }
   std::size_t bytes() const {
     return depth.bytes() + normal.bytes() + albedo.bytes() + direct.bytes() + emission.bytes() +
-           motion_prev.bytes() + motion_next.bytes() + beauty.bytes();
+           motion_prev.bytes() + motion_next.bytes() + beauty.bytes() + indirect.bytes();
   }
 };
 

@@ -35,6 +35,9 @@ struct InputOptions {
   // lacks, so that rays leaving it meet what the whole frame shows. Empty: none.
   std::string context;
   std::vector<ViewOptions> views;  // --view, --latlong-view: read as the input is
+  // --guide: a few-sample render of the shot with the renderer's diffuse indirect light, read as
+  // the input is; empty: none.
+  std::string guide;
 };
 
 // How to write result frames.

@@ -6,6 +6,7 @@
 #include <memory>
 #include <vector>
 
+#include "gi/guide.h"
 #include "ssgi/gbuffer.h"
 #include "ssgi/image.h"
 
@@ -32,7 +33,8 @@ struct TracedLight {
   MissColours miss_colours{};
   std::array<float, 3> miss_weight{};  // each group's share of the frame's misses (0: none)
   Image miss_shares;
-  Image reflected;  // 3 channels, the grid's size: the light its surfaces reflect
+  Image reflected;    // 3 channels, the grid's size: the light its surfaces reflect
+  GuideOnGrid guide;  // Plan::guide: the frame's guide on the grid (FrameStages::guide_on_grid)
 };
 
 // The window's lights (TracedLight::light of each of `window`) with the miss model's colours of

@@ -20,6 +20,7 @@
 #include "io/camera_fit.h"
 #include "io/camera_header.h"
 #include "io/color.h"
+#include "io/guide.h"
 #include "io/input_frame.h"
 #include "io/oiio_files.h"
 #include "io/pass_agreement.h"
@@ -488,6 +489,8 @@ std::shared_ptr<const SequenceInfo> open_context(const SequenceInfo& seq,
     // Positions are read only to fit a camera, which the context's frames do on their own;
     // normals from depth need none.
     if (role == Role::kPosition || (role == Role::kNormal && seq.normals_from_depth)) continue;
+    // A shot's own indirect light is never read (a guide's is).
+    if (role == Role::kIndirect) continue;
     if (seq.layout.has(role) && !context->layout.has(role))
       throw_input(first, std::string("--context: has no ") + role_name(role) +
                              " channels, which the input has");
@@ -648,6 +651,7 @@ SequenceInfo open_sequence(const InputOptions& options, bool check_header_camera
 SequenceInfo open_sequence(const InputOptions& options) {
   SequenceInfo seq = open_sequence(options, true);
   if (!options.views.empty()) seq.views = detail::open_views(seq, options);
+  if (!options.guide.empty()) seq.guide = detail::open_guide(seq, options);
   return seq;
 }
 
@@ -784,7 +788,8 @@ GBuffer convert_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
   }
   for (auto [role, image] : {std::pair{Role::kAlbedo, &g.albedo},
                              {Role::kDirect, &g.direct},
-                             {Role::kEmission, &g.emission}}) {
+                             {Role::kEmission, &g.emission},
+                             {Role::kIndirect, &g.indirect}}) {
     if (!wanted(role)) continue;
     *image = Image(w, h, channels(role));
     target(role, image, 0, image->channels());
@@ -839,6 +844,18 @@ GBuffer convert_gbuffer(const SequenceInfo& seq, int frame, RoleMask roles,
     }
   }
   if (wanted(Role::kEmission)) colour_pass(&g.emission);
+  if (wanted(Role::kIndirect)) {
+    colour_pass(&g.indirect);
+    if (preset.direct_includes_albedo) {
+      if (g.albedo.empty())
+        throw_input(path, "indirect light includes albedo but there is no albedo to divide by");
+      for (int c = 0; c < 3; ++c)
+        for (std::size_t p = 0; p < g.indirect.plane_size(); ++p) {
+          const float a = g.albedo.plane(c)[p];
+          g.indirect.plane(c)[p] = a > 0 ? finite_or(g.indirect.plane(c)[p] / a, 0.0f) : 0.0f;
+        }
+    }
+  }
   if (wanted(Role::kMotion))
     convert_motion(std::move(motion_xy), std::move(motion_zw), preset.motion, g.display_window, &g);
   if (wanted(Role::kBeauty)) {
@@ -935,7 +952,7 @@ InputFrame read_input_frame(const SequenceInfo& seq, int frame, RoleMask roles,
   GBuffer g = convert_gbuffer(seq, frame, roles, options, color, *input, fill, report);
   in.reset();
   g = with_context(seq, frame, roles, options, color, std::move(g), report);
-  return {std::move(g), std::move(input), {}};
+  return {std::move(g), std::move(input), {}, {}};
 }
 
 }  // namespace detail

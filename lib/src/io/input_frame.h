@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "io/guide_frame.h"
 #include "io/oiio_files.h"
 #include "io/sequence_info.h"
 #include "ssgi/gbuffer.h"
@@ -29,6 +30,7 @@ struct InputFrame {
   GBuffer g;
   std::shared_ptr<const DecodedInput> input;
   std::vector<GBuffer> views;  // the frame's views (io/views.h), until it is lit
+  GuideFrame guide;            // the frame's guide (io/guide.h), until it is lit
 };
 
 // read_gbuffer, keeping the parts' headers (which the writer copies, and checks the file

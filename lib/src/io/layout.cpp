@@ -21,8 +21,8 @@ namespace {
 
 namespace Strutil = OIIO::Strutil;
 
-constexpr const char* kRoleNames[kRoleCount] = {"depth",    "normal", "albedo",   "direct",
-                                                "emission", "motion", "position", "beauty"};
+constexpr const char* kRoleNames[kRoleCount] = {
+    "depth", "normal", "albedo", "direct", "emission", "motion", "position", "beauty", "indirect"};
 
 constexpr const char* kPartPrefix = "part:";
 
@@ -54,6 +54,7 @@ const std::vector<std::vector<std::string>>& component_sets(Role role) {
     case Role::kAlbedo:
     case Role::kDirect:
     case Role::kEmission:
+    case Role::kIndirect:
       break;
   }
   return kColour;
@@ -494,8 +495,12 @@ void apply_overrides(const std::vector<Override>& overrides, const ChannelIndex&
                      Layout* layout) {
   for (const Override& o : overrides) {
     Match m;
-    if (!match_candidate(index, o.role, o.name, preferred_prefix, &m))
+    if (!match_candidate(index, o.role, o.name, preferred_prefix, &m)) {
+      // The shot need not have the indirect light a guide's --channel names: the guide is
+      // refused for lacking it (io/guide.h), the shot never reads its own.
+      if (o.role == Role::kIndirect) continue;
       throw_input(file_name, "--channel " + o.text + ": the file has no " + override_search(o));
+    }
     layout->roles[static_cast<int>(o.role)] = std::move(m.channels);
   }
 }

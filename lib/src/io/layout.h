@@ -17,15 +17,19 @@ enum class Role : int {
   kMotion,
   kPosition,
   kBeauty,
+  // The renderer's diffuse indirect light (with or without albedo, as its direct pass is): read
+  // only from a guide (--guide), never from the shot itself.
+  kIndirect,
 };
-constexpr int kRoleCount = 8;
+constexpr int kRoleCount = 9;
 
-// "depth", "normal", "albedo", "direct", "emission", "motion", "position", "beauty".
+// "depth", "normal", "albedo", "direct", "emission", "motion", "position", "beauty",
+// "indirect".
 const char* role_name(Role role);
 // Parses a role name as above; returns false when unknown.
 bool parse_role(const std::string& name, Role* role);
-// Channels a role has, in order: depth Z; normal X Y Z; albedo, direct, emission R G B;
-// motion X Y [Z W] (two or four); position X Y Z; beauty R G B [A].
+// Channels a role has, in order: depth Z; normal X Y Z; albedo, direct, emission, indirect
+// R G B; motion X Y [Z W] (two or four); position X Y Z; beauty R G B [A].
 int role_min_components(Role role);
 int role_max_components(Role role);
 
@@ -90,6 +94,8 @@ struct LayoutPreset {
   // World-space normals need the frame's world transform (header, sidecar or a fit to the
   // position pass). kAuto where the renderer's documentation does not say.
   NormalSpace normal_space = NormalSpace::kWorld;
+  // Whether the direct and indirect light passes include the albedo (an LPE's radiance) or not
+  // (Blender's DiffDir and DiffInd, V-Ray's raw passes).
   bool direct_includes_albedo = false;
   // True for renderers that do not sample emissive surfaces as lights, so emission must be
   // gathered by the rays (ssgi-run(1), --gather-emission).

@@ -31,6 +31,15 @@ struct ViewInfo {
   std::string path_for(int frame) const;
 };
 
+// A guide (--guide, io/guide.h) as probed from its first file: a few-sample render of the shot
+// carrying the renderer's diffuse indirect light.
+struct GuideInfo {
+  std::string pattern;  // as given
+  // Its files as a sequence of their own (its windows, channels and layout).
+  std::shared_ptr<const SequenceInfo> sequence;
+  int fraction = 1;  // the shot's resolution over the guide's, each axis: 1, 2, 3, ...
+};
+
 // A sequence as found on disk, probed from its first frame.
 struct SequenceInfo {
   SequencePattern pattern;
@@ -50,6 +59,8 @@ struct SequenceInfo {
   std::shared_ptr<const SequenceInfo> context;
   // --view, --latlong-view: the extra views, in the order given.
   std::vector<ViewInfo> views;
+  // --guide: null without one.
+  std::shared_ptr<const GuideInfo> guide;
 
   // The window the G-buffers read cover: the context's data window, else the data window.
   const Box2i& working_window() const { return context ? context->data_window : data_window; }

@@ -66,6 +66,11 @@ const std::vector<OptionSpec> kTable = {
      "an extra view of the scene (repeatable): a pinhole render with its own camera, e.g. a cube "
      "face, as a sequence (####) or a still; missed rays continue in it",
      nullptr},
+    {kGuide, "guide", 0, "PATTERN", OptionGroup::kInput, kRunCommand | kInfoCommand,
+     "a few-sample render of the shot with the renderer's diffuse indirect light (layout role "
+     "indirect), at its resolution or a whole fraction of it: ssgi's light becomes its control "
+     "variate",
+     nullptr},
     {kLatLongView, "latlong-view", 0, "PATTERN", OptionGroup::kInput,
      kRunCommand | kInfoCommand | kSweepCommand,
      "the same for a lat-long (equirectangular) panorama, camera from worldToCamera", nullptr},

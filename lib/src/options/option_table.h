@@ -39,6 +39,7 @@ enum OptionId : int {
   kContext,
   kView,
   kLatLongView,
+  kGuide,
   kRays,
   kTracer,
   kSlices,

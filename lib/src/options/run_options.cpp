@@ -165,6 +165,10 @@ CommonOptions parse_common_options(Subcommand sub, int argc, char** argv, bool n
         if (*a == '\0') ssgi::throw_usage("--context: empty pattern");
         in.context = a;
         break;
+      case kGuide:
+        if (*a == '\0') ssgi::throw_usage("--guide: empty pattern");
+        in.guide = a;
+        break;
       case kView:
       case kLatLongView: {
         if (*a == '\0')

@@ -1,0 +1,193 @@
+#include "gi/guide.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "gi/denoise.h"
+#include "parallel.h"
+#include "throw.h"
+
+namespace ssgi::detail {
+namespace {
+
+// Pyramid levels the residual is filtered over beyond the light's own: each halves the
+// resolution, averaging four times the samples, and the guide's few samples a pixel are far
+// noisier than the light ssgi traces.
+constexpr int kResidualExtraLevels = 2;
+
+// The guide pixels of a trace sample, on the guide's pixel lattice: [x0, x1) x [y0, y1).
+struct GuideRect {
+  int x0, y0, x1, y1;
+};
+
+// The sum of a channel's guide values on a surface, and their count.
+struct Moments {
+  double sum = 0;
+  int n = 0;
+  void add(double v) {
+    sum += v;
+    ++n;
+  }
+};
+
+// `image` (3 channels) with each channel multiplied by `weight`'s.
+Image weighted(const Image& image, const Image& weight) {
+  Image out(image.width(), image.height(), 3);
+  for (int c = 0; c < 3; ++c) {
+    const float* a = image.plane(c);
+    const float* w = weight.plane(c);
+    float* o = out.plane(c);
+    parallel_for_rows(image.height(), [&](int y) {
+      const std::size_t row = static_cast<std::size_t>(y) * image.width();
+      for (int x = 0; x < image.width(); ++x) o[row + x] = a[row + x] * w[row + x];
+    });
+  }
+  return out;
+}
+
+}  // namespace
+
+GuideOnGrid guide_on_grid(const GBuffer& frame, const GBuffer& grid, int scale,
+                          const GuideFrame& guide, float thickness) {
+  const int gw = grid.width(), gh = grid.height();
+  const int f = guide.fraction;
+  const int lw = guide.light.width(), lh = guide.light.height();
+  // Data-window pixels to the guide's lattice (the guide covers the shot's display window).
+  const int ox = frame.data_window.x0 - frame.display_window.x0;
+  const int oy = frame.data_window.y0 - frame.display_window.y0;
+  const auto lattice = [&](int v, int offset, int size) {
+    const int d = v + offset;
+    return std::clamp(d >= 0 ? d / f : -1, 0, size - 1);
+  };
+  GuideOnGrid out;
+  out.mean = Image(gw, gh, 3);
+  out.variance = Image(gw, gh, 3);
+  out.known = Image(gw, gh, 3);
+  const float* zg = guide.depth.plane(0);
+  parallel_for_rows(gh, [&](int by) {
+    for (int bx = 0; bx < gw; ++bx) {
+      const std::size_t s = static_cast<std::size_t>(by) * gw + bx;
+      const float zs = grid.depth.plane(0)[s];
+      if (!std::isfinite(zs)) continue;
+      const int x0 = bx * scale, y0 = by * scale;
+      const int x1 = std::min(x0 + scale, frame.width()) - 1;
+      const int y1 = std::min(y0 + scale, frame.height()) - 1;
+      const GuideRect block{lattice(x0, ox, lw), lattice(y0, oy, lh), lattice(x1, ox, lw) + 1,
+                            lattice(y1, oy, lh) + 1};
+      const GuideRect grown{std::max(block.x0 - 1, 0), std::max(block.y0 - 1, 0),
+                            std::min(block.x1 + 1, lw), std::min(block.y1 + 1, lh)};
+      // A guide pixel is on the sample's surface when its depth is within `thickness` of the
+      // sample's, and gives channel c when the guide knows it there.
+      const auto on_surface = [&](int x, int y, int c) {
+        const std::size_t q = static_cast<std::size_t>(y) * lw + x;
+        return std::fabs(zg[q] - zs) <= thickness * zs &&
+               (guide.known.empty() || guide.known.plane(c)[q] != 0);
+      };
+      for (int c = 0; c < 3; ++c) {
+        const float* v = guide.light.plane(c);
+        Moments in_block, around;
+        // The noise from each pixel's second differences along x and y where both neighbours
+        // are on the surface: a ramp's are 0, a smooth light's small, and iid noise of variance
+        // s^2 gives a squared difference v - (left + right) / 2 of 1.5 s^2. The light's own slope
+        // is not taken for noise, so that a guide without noise has none.
+        double noise = 0;
+        int noise_n = 0;
+        const auto value_at = [&](int x, int y) { return v[static_cast<std::size_t>(y) * lw + x]; };
+        for (int y = grown.y0; y < grown.y1; ++y)
+          for (int x = grown.x0; x < grown.x1; ++x) {
+            if (!on_surface(x, y, c)) continue;
+            const double value = value_at(x, y);
+            around.add(value);
+            if (x >= block.x0 && x < block.x1 && y >= block.y0 && y < block.y1) in_block.add(value);
+            if (x > 0 && x + 1 < lw && on_surface(x - 1, y, c) && on_surface(x + 1, y, c)) {
+              const double d = value - 0.5 * (value_at(x - 1, y) + value_at(x + 1, y));
+              noise += d * d / 1.5;
+              ++noise_n;
+            }
+            if (y > 0 && y + 1 < lh && on_surface(x, y - 1, c) && on_surface(x, y + 1, c)) {
+              const double d = value - 0.5 * (value_at(x, y - 1) + value_at(x, y + 1));
+              noise += d * d / 1.5;
+              ++noise_n;
+            }
+          }
+        if (around.n == 0) continue;
+        const Moments& mean = in_block.n > 0 ? in_block : around;
+        out.mean.plane(c)[s] = static_cast<float>(mean.sum / mean.n);
+        // A surface too small to show noise (a pixel or two wide both ways) is its own
+        // neighbourhood for the denoiser too: the guide's mean is kept there as it is.
+        out.variance.plane(c)[s] = noise_n > 0 ? static_cast<float>(noise / noise_n / mean.n) : 0;
+        out.known.plane(c)[s] = 1.0f;
+      }
+    }
+  });
+  return out;
+}
+
+Image guided_light(const Image& light, const GuideOnGrid& guide, const Image& grid_depth,
+                   const Image& depth, const Image& normal, int level,
+                   const DenoiseSettings& settings, GuideReport* report) {
+  const int w = light.width(), h = light.height();
+  for (const Image* image : {&guide.mean, &guide.variance, &guide.known, &grid_depth})
+    if (image->width() != w || image->height() != h || light.channels() != 3)
+      throw Error(ErrorKind::kInternal, "", "guided_light: images of different sizes");
+  DenoiseSettings wide = settings;
+  wide.levels = std::max(settings.levels, level) + kResidualExtraLevels;
+  // The pyramid filters each channel as a convex combination over a surface: filtering a value
+  // times its weight and the weight alike, their ratio is the mean over the known samples alone
+  // (normalised convolution).
+  const auto filter = [&](const Image& image) {
+    return upsample_and_denoise(image, level, depth, normal, wide, true, level);
+  };
+  Image residual(w, h, 3);
+  for (int c = 0; c < 3; ++c)
+    for (std::size_t p = 0; p < residual.plane_size(); ++p)
+      residual.plane(c)[p] =
+          guide.known.plane(c)[p] > 0 ? guide.mean.plane(c)[p] - light.plane(c)[p] : 0.0f;
+  const Image weight = filter(guide.known);
+  const Image smooth_sum = filter(weighted(residual, guide.known));
+  Image smooth(w, h, 3), detail(w, h, 3), energy_in(w, h, 3);
+  for (int c = 0; c < 3; ++c)
+    for (std::size_t p = 0; p < smooth.plane_size(); ++p) {
+      const float wt = weight.plane(c)[p];
+      const float r = wt > 0 ? smooth_sum.plane(c)[p] / wt : 0.0f;
+      smooth.plane(c)[p] = r;
+      const float d = guide.known.plane(c)[p] > 0 ? residual.plane(c)[p] - r : 0.0f;
+      detail.plane(c)[p] = d;
+      energy_in.plane(c)[p] = d * d;
+    }
+  const Image energy = filter(energy_in);
+  const Image noise = filter(weighted(guide.variance, guide.known));
+  Image out(w, h, 3);
+  double residual_sum = 0, out_sum = 0, kept_sum = 0;
+  std::size_t surface = 0, known = 0;
+  for (std::size_t p = 0; p < out.plane_size(); ++p) {
+    if (!std::isfinite(grid_depth.plane(0)[p])) continue;
+    bool any_known = false;
+    for (int c = 0; c < 3; ++c) {
+      const float wt = weight.plane(c)[p];
+      float kept = 0;
+      if (wt > 0 && guide.known.plane(c)[p] > 0) {
+        const float e = energy.plane(c)[p] / wt, n = noise.plane(c)[p] / wt;
+        kept = e > 0 ? std::max(0.0f, e - n) / e : 0.0f;
+        any_known = true;
+      }
+      const float r = smooth.plane(c)[p] + kept * detail.plane(c)[p];
+      const float v = std::max(0.0f, light.plane(c)[p] + r);
+      out.plane(c)[p] = v;
+      residual_sum += v - light.plane(c)[p];
+      out_sum += v;
+      kept_sum += kept;
+    }
+    known += any_known ? 1 : 0;
+    ++surface;
+  }
+  if (report) {
+    report->residual_share = out_sum > 0 ? residual_sum / out_sum : 0.0;
+    report->detail_kept = known > 0 ? kept_sum / (3.0 * static_cast<double>(known)) : 0.0;
+    report->known_share = surface > 0 ? static_cast<double>(known) / surface : 0.0;
+  }
+  return out;
+}
+
+}  // namespace ssgi::detail
