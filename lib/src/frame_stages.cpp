@@ -275,32 +275,45 @@ GuideOnGrid FrameStages::guide_on_grid(const GBuffer& g, const GBuffer& grid,
 Image FrameStages::guided(const GBuffer& g, const std::vector<const TracedLight*>& window,
                           int center, int radius, const Image& on_grid) const {
   const TracedLight& own = *window[center];
+  // The window's guides carried into this frame and averaged where found, each frame alike: a
+  // few-sample render is mostly rare bright samples, which the light's variance clipping would
+  // take for change and cut, darkening it; the disocclusion tests alone decide.
   GuideOnGrid guide;
-  if (window.size() == 1 || radius == 0) {
-    guide = own.guide;
-  } else {
-    // Each frame's mean where its guide is not known is its own light: no residual there.
-    std::vector<const GBuffer*> grids;
-    std::vector<Image> means;
-    std::vector<const Image*> mean, known, variance;
-    for (const TracedLight* t : window) {
-      grids.push_back(&t->grid);
-      Image m = t->guide.mean;
-      for (int c = 0; c < 3; ++c)
-        for (std::size_t p = 0; p < m.plane_size(); ++p)
-          if (t->guide.known.plane(c)[p] == 0) m.plane(c)[p] = t->light.plane(c)[p];
-      means.push_back(std::move(m));
-      known.push_back(&t->guide.known);
-      variance.push_back(&t->guide.variance);
+  guide.mean = own.guide.mean;
+  guide.known = own.guide.known;
+  guide.variance = own.guide.variance;
+  Image frames(own.guide.mean.width(), own.guide.mean.height(), 1, 1.0f);
+  std::vector<const GBuffer*> grids;
+  for (const TracedLight* t : window) grids.push_back(&t->grid);
+  const int n = own.grid.frame;
+  for (int i = 0; i < static_cast<int>(window.size()); ++i) {
+    if (i == center || std::abs(window[i]->grid.frame - n) > radius) continue;
+    const GuideOnGrid& other = window[i]->guide;
+    Image valid;
+    const Image mean = reproject(grids, center, i, other.mean, &valid);
+    const Image known = reproject(grids, center, i, other.known, nullptr);
+    const Image variance = reproject(grids, center, i, other.variance, nullptr);
+    for (std::size_t p = 0; p < frames.plane_size(); ++p) {
+      const float v = valid.plane(0)[p];
+      frames.plane(0)[p] += v;
+      for (int c = 0; c < 3; ++c) {
+        guide.mean.plane(c)[p] += v * mean.plane(c)[p];
+        guide.known.plane(c)[p] += v * known.plane(c)[p];
+        guide.variance.plane(c)[p] += v * variance.plane(c)[p];
+      }
     }
-    for (const Image& m : means) mean.push_back(&m);
-    guide.mean = temporal_window(grids, mean, center, radius);
-    guide.known = temporal_window(grids, known, center, radius);
-    guide.variance = temporal_window(grids, variance, center, radius);
-    const float frames = static_cast<float>(window.size());
-    for (int c = 0; c < 3; ++c)
-      for (std::size_t p = 0; p < guide.variance.plane_size(); ++p)
-        guide.variance.plane(c)[p] /= frames;
+  }
+  // The means of the frames found; the variance of a mean of k frames' means is their mean
+  // variance over k.
+  for (std::size_t p = 0; p < frames.plane_size(); ++p) {
+    const float k = frames.plane(0)[p];
+    for (int c = 0; c < 3; ++c) {
+      const float known = guide.known.plane(c)[p];
+      // Each frame's mean counts where its guide is known.
+      guide.mean.plane(c)[p] = known > 0 ? guide.mean.plane(c)[p] / known : 0.0f;
+      guide.variance.plane(c)[p] = known > 0 ? guide.variance.plane(c)[p] / (known * known) : 0.0f;
+      guide.known.plane(c)[p] = known / k;
+    }
   }
   GuideReport report;
   Image out = guided_light(on_grid, guide, own.grid.depth, g.depth, g.normal,

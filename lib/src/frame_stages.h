@@ -70,9 +70,9 @@ class FrameStages {
 
   // Plan::guide: `on_grid` (the light of window[center], frame g, on its trace grid after the
   // temporal stage) with the guides of `window` (TracedLight::guide, ascending frame order):
-  // their means, knowns and variances filtered over the window within `radius` frames as the
-  // light is (the variance over the frames averaged), then guided_light. -v reports what the
-  // guide brought.
+  // those within `radius` frames carried into it (reprojected, without the light's variance
+  // clipping) and averaged over the frames found, then guided_light. -v reports what the guide
+  // brought.
   Image guided(const GBuffer& g, const std::vector<const TracedLight*>& window, int center,
                int radius, const Image& on_grid) const;
 

@@ -11,11 +11,6 @@
 namespace ssgi::detail {
 namespace {
 
-// Pyramid levels the residual is filtered over beyond the light's own: each halves the
-// resolution, averaging four times the samples, and the guide's few samples a pixel are far
-// noisier than the light ssgi traces.
-constexpr int kResidualExtraLevels = 2;
-
 // The guide pixels of a trace sample, on the guide's pixel lattice: [x0, x1) x [y0, y1).
 struct GuideRect {
   int x0, y0, x1, y1;
@@ -131,13 +126,15 @@ Image guided_light(const Image& light, const GuideOnGrid& guide, const Image& gr
   for (const Image* image : {&guide.mean, &guide.variance, &guide.known, &grid_depth})
     if (image->width() != w || image->height() != h || light.channels() != 3)
       throw Error(ErrorKind::kInternal, "", "guided_light: images of different sizes");
-  DenoiseSettings wide = settings;
-  wide.levels = std::max(settings.levels, level) + kResidualExtraLevels;
+  // The residual's pyramid goes as deep as the light's (tests/accuracy/README.md, "Guides":
+  // deeper blurs more of the residual's shape than it takes of the guide's noise).
+  DenoiseSettings residual_settings = settings;
+  residual_settings.levels = std::max(settings.levels, level);
   // The pyramid filters each channel as a convex combination over a surface: filtering a value
   // times its weight and the weight alike, their ratio is the mean over the known samples alone
   // (normalised convolution).
   const auto filter = [&](const Image& image) {
-    return upsample_and_denoise(image, level, depth, normal, wide, true, level);
+    return upsample_and_denoise(image, level, depth, normal, residual_settings, true, level);
   };
   Image residual(w, h, 3);
   for (int c = 0; c < 3; ++c)
