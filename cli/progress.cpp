@@ -231,6 +231,10 @@ void write_stats(const std::string& path, const CommonOptions& o, const ssgi::Ru
       j["gi_ms"] = f.gi_ms;
       j["write_ms"] = f.write_ms;
       j["sanitized"] = f.sanitized;
+      if (f.guide.used)
+        j["guide"] = {{"known_share", f.guide.known_share},
+                      {"residual_share", f.guide.residual_share},
+                      {"detail_kept", f.guide.detail_kept}};
       read.push_back(f.read_ms);
       gi.push_back(f.gi_ms);
       write.push_back(f.write_ms);

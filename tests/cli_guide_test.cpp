@@ -4,8 +4,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 #include <functional>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -131,6 +133,30 @@ TEST_F(CliGuide, AGuideAtHalfTheResolutionGivesItsLight) {
   EXPECT_NE(r.err.find("1/2 of it"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("frame 5: guide: gives the light of "), std::string::npos) << r.err;
   EXPECT_LT(largest_difference(read_exr(path(frame_name("out", 5))), flat), 1e-4);
+}
+
+TEST_F(CliGuide, StatsSayWhatTheGuideBrought) {
+  // A ramp without noise, unlike ssgi's light: its residual brings a share of the light, and
+  // its detail is kept whole.
+  write_guide(1, guide_light);
+  const CliResult r = run({"--frames", "5", "--stats", path("stats.json")});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream in(path("stats.json"));
+  const nlohmann::json stats = nlohmann::json::parse(in);
+  const nlohmann::json& guide = stats.at("frames").at(0).at("guide");
+  EXPECT_NEAR(guide.at("known_share").get<double>(), 1.0, 0.05);
+  EXPECT_EQ(guide.at("detail_kept").get<double>(), 1.0);  // a guide without noise
+  const double share = guide.at("residual_share").get<double>();
+  EXPECT_NE(share, 0.0);
+  EXPECT_GT(share, -1.0);
+  EXPECT_LT(share, 1.0);
+  // Without a guide there is no such object.
+  const CliResult alone =
+      run_ssgi({"run", testdata("static/static.####.exr"), "-o", path("alone.####.exr"), "-q",
+                "--frames", "5", "--stats", path("alone.json")});
+  ASSERT_EQ(alone.exit_code, 0) << alone.err;
+  std::ifstream alone_in(path("alone.json"));
+  EXPECT_FALSE(nlohmann::json::parse(alone_in).at("frames").at(0).contains("guide"));
 }
 
 TEST_F(CliGuide, InfoNamesTheGuideInThePlan) {

@@ -273,7 +273,8 @@ GuideOnGrid FrameStages::guide_on_grid(const GBuffer& g, const GBuffer& grid,
 }
 
 Image FrameStages::guided(const GBuffer& g, const std::vector<const TracedLight*>& window,
-                          int center, int radius, const Image& on_grid) const {
+                          int center, int radius, const Image& on_grid,
+                          GuideReport* out_report) const {
   const TracedLight& own = *window[center];
   // The window's guides carried into this frame and averaged where found, each frame alike: a
   // few-sample render is mostly rare bright samples, which the light's variance clipping would
@@ -323,6 +324,7 @@ Image FrameStages::guided(const GBuffer& g, const std::vector<const TracedLight*
            percent(report.known_share) + " of the trace samples; its residual brought " +
            (report.residual_share >= 0 ? "+" : "") + percent(report.residual_share) +
            " of the light, " + percent(report.detail_kept) + " of its detail kept as it is");
+  if (out_report) *out_report = report;
   return out;
 }
 

@@ -74,7 +74,7 @@ class FrameStages {
   // clipping) and averaged over the frames found, then guided_light. -v reports what the guide
   // brought.
   Image guided(const GBuffer& g, const std::vector<const TracedLight*>& window, int center,
-               int radius, const Image& on_grid) const;
+               int radius, const Image& on_grid, GuideReport* report = nullptr) const;
 
   // Light on the trace grid (temporally filtered or not) carried to the frame's resolution by
   // the denoiser's bilateral upsampling.

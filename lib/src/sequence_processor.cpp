@@ -255,7 +255,17 @@ struct FinishedFrame {
   std::shared_ptr<FrameResult> result;
   std::optional<FrameError> error;
   double read_ms = 0, gi_ms = 0;
+  GuideStats guide;
 };
+
+GuideStats guide_stats(const GuideReport& r) {
+  GuideStats s;
+  s.used = true;
+  s.known_share = r.known_share;
+  s.residual_share = r.residual_share;
+  s.detail_kept = r.detail_kept;
+  return s;
+}
 
 class Processor {
  public:
@@ -515,8 +525,11 @@ class Processor {
                                         : std::nullopt;
       Image filtered =
           filter_window(lit_frames, center, radius_, continued ? &*continued : nullptr);
-      if (stages_.plan().guide)
-        filtered = stages_.guided(*lit.g, lit_frames, center, radius_, filtered);
+      if (stages_.plan().guide) {
+        GuideReport report;
+        filtered = stages_.guided(*lit.g, lit_frames, center, radius_, filtered, &report);
+        m->guide = guide_stats(report);
+      }
       indirect = stages_.light_at_frame(*lit.g, filtered);
       coverage = stages_.coverage_at_frame(*lit.g, lit.traced.grid,
                                            continued ? continued->coverage : lit.traced.coverage);
@@ -542,7 +555,9 @@ class Processor {
         TracedLight t = stages_.grid_light(*g, &views);
         t.guide = stages_.guide_on_grid(*g, t.grid, own->guide);
         own->guide = GuideFrame();
-        indirect = stages_.light_at_frame(*g, stages_.guided(*g, {&t}, 0, 0, t.light));
+        GuideReport report;
+        indirect = stages_.light_at_frame(*g, stages_.guided(*g, {&t}, 0, 0, t.light, &report));
+        m->guide = guide_stats(report);
         coverage = stages_.coverage_at_frame(*g, t.grid, t.coverage);
       } else {
         indirect = stages_.indirect_light(*g, &coverage, &views);
@@ -573,6 +588,7 @@ class Processor {
       try {
         if (m.error) rethrow(*m.error);
         fr.sanitized = m.g->sanitized;
+        fr.guide = m.guide;
         if (callbacks_.on_result) caller_.call([&] { callbacks_.on_result(*m.g, *m.result); });
         // The passes go before the frame is encoded unless writing reads them.
         if (!job_.write_needs_passes) m.g = std::make_shared<const GBuffer>(without_planes(*m.g));

@@ -50,6 +50,14 @@ struct WriteOptions {
   bool warn_collisions = true;  // warn when an input channel is renamed to input.<name>
 };
 
+// What a guide (--guide) did to a frame's light, over its trace samples on surfaces.
+struct GuideStats {
+  bool used = false;
+  double known_share = 0;     // the share of the samples the guide gives the light of
+  double residual_share = 0;  // the share of the light the guide's residual brought (< 0: took)
+  double detail_kept = 0;     // the mean weight of the residual's own detail (1: as it is)
+};
+
 // What became of one frame.
 struct FrameReport {
   int frame = 0;
@@ -64,6 +72,7 @@ struct FrameReport {
   // it serves.
   double read_ms = 0, gi_ms = 0, write_ms = 0;
   std::size_t sanitized = 0;  // input values that were NaN or infinite, read as 0
+  GuideStats guide;           // when ok, with a guide
 };
 
 // What became of a run's frames.

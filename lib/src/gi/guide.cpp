@@ -11,6 +11,11 @@
 namespace ssgi::detail {
 namespace {
 
+// The residual filter's range terms (DenoiseSettings::normal_power, sigma_depth): normals within
+// about 50 degrees, depths within about 20% of one plane still share their residual.
+constexpr float kResidualNormalPower = 2.0f;
+constexpr float kResidualSigmaDepth = 0.2f;
+
 // The guide pixels of a trace sample, on the guide's pixel lattice: [x0, x1) x [y0, y1).
 struct GuideRect {
   int x0, y0, x1, y1;
@@ -126,10 +131,14 @@ Image guided_light(const Image& light, const GuideOnGrid& guide, const Image& gr
   for (const Image* image : {&guide.mean, &guide.variance, &guide.known, &grid_depth})
     if (image->width() != w || image->height() != h || light.channels() != 3)
       throw Error(ErrorKind::kInternal, "", "guided_light: images of different sizes");
-  // The residual's pyramid goes as deep as the light's (tests/accuracy/README.md, "Guides":
-  // deeper blurs more of the residual's shape than it takes of the guide's noise).
+  // The residual's pyramid goes as deep as the light's, with looser edges: what ssgi gets wrong
+  // follows the geometry less sharply than the light does, and the light's edges leave pixels
+  // of fine geometry (grass, rods) belonging to no coarser sample, so unfiltered
+  // (tests/accuracy/README.md, "Guides", has the measurements).
   DenoiseSettings residual_settings = settings;
   residual_settings.levels = std::max(settings.levels, level);
+  residual_settings.normal_power = kResidualNormalPower;
+  residual_settings.sigma_depth = kResidualSigmaDepth;
   // The pyramid filters each channel as a convex combination over a surface: filtering a value
   // times its weight and the weight alike, their ratio is the mean over the known samples alone
   // (normalised convolution).

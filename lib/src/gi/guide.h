@@ -50,8 +50,8 @@ struct GuideReport {
 // guided by `guide` (its window's frames' means, variances and known, averaged over the window
 // by the caller: the variance divided by the frames averaged): light + the residual guide -
 // light, filtered (the pyramid of `settings` from pyramid level `level`, with the full-resolution
-// `depth` and `normal`, as denoise_on_grid filters the light; `grid_depth` is the grid's, +inf
-// where a sample has no surface)
+// `depth` and `normal`, as denoise_on_grid filters the light but with looser edges;
+// `grid_depth` is the grid's, +inf where a sample has no surface)
 // where the residual's local energy is within the guide's noise, kept as it is where it stands
 // out of it (a Wiener weight per sample: max(0, energy - noise) / energy, energy and noise
 // averaged over the surface as the residual is). Never below 0. Throws Error(kInternal) when the
