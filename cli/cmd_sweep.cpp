@@ -52,6 +52,7 @@ void print_help() {
 struct SweepRun {
   std::string name;
   ssgi::GiSettings gi;
+  bool guide = false;  // with the --guide given (the other runs go without it)
 };
 
 // The settings presets and the grid change, as one CSV cell without commas.
@@ -70,6 +71,16 @@ std::vector<SweepRun> sweep_runs(const CommonOptions& o) {
     SweepRun r{preset, o.run.gi};
     ssgi::apply_preset(preset, &r.gi);
     runs.push_back(r);
+  }
+  // With a guide, each preset again with it: the trade a guide makes beside ssgi alone.
+  if (!o.run.input.guide.empty()) {
+    const std::size_t presets = runs.size();
+    for (std::size_t i = 0; i < presets; ++i) {
+      SweepRun r = runs[i];
+      r.name += "+guide";
+      r.guide = true;
+      runs.push_back(r);
+    }
   }
   if (o.grid) {
     for (int slices : {1, 2, 4}) {
@@ -259,6 +270,8 @@ int run_sweep(int argc, char** argv) {
   // The runs write the frames found now: a gap among them is warned about once, here.
   ssgi::InputOptions input = o.run.input;
   if (input.frames.empty()) input.frames = frame_ranges(sequence.frames);
+  // The reference and the runs without a guide read none.
+  input.guide.clear();
   const std::string first_input = sequence.pattern.path_for(sequence.frames.front());
   const std::string truth =
       o.truth.empty() ? "" : resolve_truth_layer(sequence.channels, o.truth, first_input);
@@ -303,6 +316,7 @@ int run_sweep(int argc, char** argv) {
       SweepRow& row = rows[i];
       ssgi::RunOptions run = o.run;
       run.input = input;
+      if (row.run.guide) run.input.guide = o.run.input.guide;
       run.gi = row.run.gi;
       run.output = scratch.path() + "/run.####.exr";
       run.write.passthrough = false;

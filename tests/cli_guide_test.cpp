@@ -8,6 +8,7 @@
 #include <functional>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -55,10 +56,19 @@ class CliGuide : public Cli {
         g.planes[name] = std::move(small);
         g.spec.channelnames.push_back(name);
       }
+      // No diffuse light where there is no diffuse albedo (the room's lamp), as renderers write.
+      const auto no_albedo = [&](std::size_t p) {
+        return g.planes.at("ViewLayer.DiffCol.R")[p] == 0 &&
+               g.planes.at("ViewLayer.DiffCol.G")[p] == 0 &&
+               g.planes.at("ViewLayer.DiffCol.B")[p] == 0;
+      };
       for (int c = 0; c < 3; ++c) {
         std::vector<float> plane(static_cast<std::size_t>(w) * h);
         for (int y = 0; y < h; ++y)
-          for (int x = 0; x < w; ++x) plane[static_cast<std::size_t>(y) * w + x] = light(c, x, y);
+          for (int x = 0; x < w; ++x) {
+            const std::size_t p = static_cast<std::size_t>(y) * w + x;
+            plane[p] = no_albedo(p) ? 0.0f : light(c, x, y);
+          }
         g.planes[kIndirect[c]] = std::move(plane);
         g.spec.channelnames.push_back(kIndirect[c]);
       }
@@ -157,6 +167,30 @@ TEST_F(CliGuide, StatsSayWhatTheGuideBrought) {
   ASSERT_EQ(alone.exit_code, 0) << alone.err;
   std::ifstream alone_in(path("alone.json"));
   EXPECT_FALSE(nlohmann::json::parse(alone_in).at("frames").at(0).contains("guide"));
+}
+
+TEST_F(CliGuide, TheSweepRunsEachPresetWithAndWithoutTheGuide) {
+  // The guide's files as the shot too, so that their DiffInd is the truth the rows are measured
+  // against: with the guide a run gives it back, without it ssgi alone is far from the ramp.
+  write_guide(1, guide_light);
+  const CliResult r = run_ssgi({"sweep", path("guide.####.exr"), "--frames", "4-6", "--presets",
+                                "draft", "--reference-spp", "8", "--truth", "DiffInd", "--guide",
+                                path("guide.####.exr"), "-o", path("t.csv")});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream in(path("t.csv"));
+  std::vector<std::vector<std::string>> rows;
+  for (std::string line; std::getline(in, line);) {
+    std::vector<std::string> cells;
+    std::stringstream cells_in(line);
+    for (std::string cell; std::getline(cells_in, cell, ',');) cells.push_back(cell);
+    rows.push_back(cells);
+  }
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(rows[1][0], "draft");
+  EXPECT_EQ(rows[2][0], "draft+guide");
+  EXPECT_GT(std::stod(rows[1][6]), 0.1) << "ssgi alone against the ramp";
+  EXPECT_LT(std::stod(rows[2][6]), 1e-3) << "with the guide that is the truth";
+  EXPECT_GT(std::stod(rows[2][2]), 0.0);
 }
 
 TEST_F(CliGuide, InfoNamesTheGuideInThePlan) {

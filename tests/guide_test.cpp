@@ -127,6 +127,23 @@ TEST(Guide, ANoisyGuideAroundTheTruthBeatsBothItAndTheLightAlone) {
   EXPECT_NEAR(mean(out) / mean(t), 1.0, 0.02);
 }
 
+TEST(Guide, AFireflyIsSpreadOverItsSurfaceNotKeptNorCut) {
+  // ssgi right, the guide right but for one sample 100 times the light (a few-sample render's
+  // firefly, a path that found a light by chance): its energy is the guide's, an unbiased
+  // estimate's, so it stays in the frame's light, spread over the surface, not left as a spike.
+  const GBuffer g = two_planes(kW, kH);
+  Image t(kW, kH, 3, 0.5f);
+  Image noisy = t;
+  const int fx = 10, fy = 20;
+  for (int c = 0; c < 3; ++c) noisy.at(c, fx, fy) = 50.0f;
+  const GuideOnGrid on_grid = guide_on_grid(g, g, 1, guide_of(noisy, g.depth, 1), 0.1f);
+  const Image out = guided_light(t, on_grid, g.depth, g.depth, g.normal, 0, DenoiseSettings());
+  double excess = 0;
+  for (std::size_t p = 0; p < out.plane_size(); ++p) excess += out.plane(0)[p] - 0.5;
+  EXPECT_LT(out.at(0, fx, fy), 0.5f + 0.05f * 49.5f) << "the spike is kept";
+  EXPECT_NEAR(excess / 49.5, 1.0, 0.3) << "the firefly's energy is lost or made";
+}
+
 TEST(Guide, WhereTheGuideDoesNotKnowTheLightItIsLeftAsItIs) {
   const GBuffer g = two_planes(kW, kH);
   const Image t = truth_image(kW, kH);

@@ -65,6 +65,18 @@ GuideOnGrid guide_on_grid(const GBuffer& frame, const GBuffer& grid, int scale,
   out.variance = Image(gw, gh, 3);
   out.known = Image(gw, gh, 3);
   const float* zg = guide.depth.plane(0);
+  // A surface without diffuse albedo (an emitter) reflects no diffuse light: a renderer writes 0
+  // there, which says nothing of the light around it. A guide pixel is read where the frame's
+  // pixel at its centre has albedo.
+  const bool with_albedo = !frame.albedo.empty();
+  const auto reflects = [&](int x, int y) {
+    if (!with_albedo) return true;
+    const int fx = x * f + f / 2 - ox, fy = y * f + f / 2 - oy;
+    if (fx < 0 || fy < 0 || fx >= frame.width() || fy >= frame.height()) return true;
+    const std::size_t p = static_cast<std::size_t>(fy) * frame.width() + fx;
+    return frame.albedo.plane(0)[p] != 0 || frame.albedo.plane(1)[p] != 0 ||
+           frame.albedo.plane(2)[p] != 0;
+  };
   parallel_for_rows(gh, [&](int by) {
     for (int bx = 0; bx < gw; ++bx) {
       const std::size_t s = static_cast<std::size_t>(by) * gw + bx;
@@ -82,7 +94,7 @@ GuideOnGrid guide_on_grid(const GBuffer& frame, const GBuffer& grid, int scale,
       const auto on_surface = [&](int x, int y, int c) {
         const std::size_t q = static_cast<std::size_t>(y) * lw + x;
         return std::fabs(zg[q] - zs) <= thickness * zs &&
-               (guide.known.empty() || guide.known.plane(c)[q] != 0);
+               (guide.known.empty() || guide.known.plane(c)[q] != 0) && reflects(x, y);
       };
       for (int c = 0; c < 3; ++c) {
         const float* v = guide.light.plane(c);

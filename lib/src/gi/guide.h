@@ -25,13 +25,15 @@ struct GuideOnGrid {
 };
 
 // `guide` (frame `frame`'s, at 1 / guide.fraction of its resolution) on the trace grid `grid`
-// (TracedLight::grid: trace samples of `scale` x `scale` blocks of the frame's data window):
-// each sample's mean over the guide pixels of its block whose depth is within `thickness` x the
-// sample's depth of it (of the block grown by a guide pixel each side where none is), and the
-// variance of that mean: the guide's noise, from the second differences of the pixels on that
-// surface in the grown block along x and y (where both neighbours are on it too), over the number
-// averaged (0 on a surface without such pixels, too small to show noise). A sample without a
-// surface, or without a guide pixel on it in the grown block, is not known.
+// (TracedLight::grid: trace samples of `scale` x `scale` blocks of the frame's data window).
+// A guide pixel is on a sample's surface when its depth is within `thickness` x the sample's of
+// it and the frame's pixel at its centre has albedo (an emitter's diffuse light says nothing).
+// Each sample's mean is over its block's guide pixels on its surface (over the block grown by a
+// guide pixel each side where none is); the variance of that mean is the guide's noise, from
+// the second differences along x and y of the pixels on the surface in the grown block (where
+// both neighbours are on it too), over the number averaged (0 on a surface without such pixels,
+// too small to show noise). A sample without a surface, or without a guide pixel on it in the
+// grown block, is not known.
 GuideOnGrid guide_on_grid(const GBuffer& frame, const GBuffer& grid, int scale,
                           const GuideFrame& guide, float thickness);
 
