@@ -90,8 +90,7 @@ TEST(Guide, AGuideWithoutNoiseGivesItsOwnLight) {
       ASSERT_NEAR(on_grid.variance.plane(c)[p], 0.0f, 1e-10f) << "a ramp is not noise";
     }
   GuideReport report;
-  const Image out =
-      guided_light(light, on_grid, g.depth, g.depth, g.normal, 0, DenoiseSettings(), &report);
+  const Image out = guided_light(light, on_grid, g.depth, g.normal, 0, DenoiseSettings(), &report);
   for (int c = 0; c < 3; ++c)
     for (int y = 0; y < kH; ++y)
       for (int x = 0; x < kW; ++x)
@@ -119,7 +118,7 @@ TEST(Guide, ANoisyGuideAroundTheTruthBeatsBothItAndTheLightAlone) {
   variance /= 3.0 * static_cast<double>(t.plane_size());
   const double sigma = 0.5 * mean(t);
   EXPECT_NEAR(variance / (sigma * sigma), 1.0, 0.2);
-  const Image out = guided_light(light, on_grid, g.depth, g.depth, g.normal, 0, DenoiseSettings());
+  const Image out = guided_light(light, on_grid, g.depth, g.normal, 0, DenoiseSettings());
   const double guided = rmse(out, t), guide = rmse(noisy, t), alone = rmse(light, t);
   EXPECT_LT(guided, 0.25 * guide) << guided << " " << guide;
   EXPECT_LT(guided, 0.25 * alone) << guided << " " << alone;
@@ -137,7 +136,7 @@ TEST(Guide, AFireflyIsSpreadOverItsSurfaceNotKeptNorCut) {
   const int fx = 10, fy = 20;
   for (int c = 0; c < 3; ++c) noisy.at(c, fx, fy) = 50.0f;
   const GuideOnGrid on_grid = guide_on_grid(g, g, 1, guide_of(noisy, g.depth, 1), 0.1f);
-  const Image out = guided_light(t, on_grid, g.depth, g.depth, g.normal, 0, DenoiseSettings());
+  const Image out = guided_light(t, on_grid, g.depth, g.normal, 0, DenoiseSettings());
   double excess = 0;
   for (std::size_t p = 0; p < out.plane_size(); ++p) excess += out.plane(0)[p] - 0.5;
   EXPECT_LT(out.at(0, fx, fy), 0.5f + 0.05f * 49.5f) << "the spike is kept";
@@ -153,7 +152,7 @@ TEST(Guide, WhereTheGuideDoesNotKnowTheLightItIsLeftAsItIs) {
   guide.known = Image(kW, kH, 3, 1.0f);
   for (std::size_t p = 0; p < guide.known.plane_size(); ++p) guide.known.plane(1)[p] = 0;
   const GuideOnGrid on_grid = guide_on_grid(g, g, 1, guide, 0.1f);
-  const Image out = guided_light(light, on_grid, g.depth, g.depth, g.normal, 0, DenoiseSettings());
+  const Image out = guided_light(light, on_grid, g.depth, g.normal, 0, DenoiseSettings());
   for (std::size_t p = 0; p < t.plane_size(); ++p) {
     ASSERT_EQ(out.plane(1)[p], light.plane(1)[p]);
     ASSERT_NEAR(out.plane(0)[p], t.plane(0)[p], 1e-5f);

@@ -293,31 +293,28 @@ Image FrameStages::guided(const GBuffer& g, const std::vector<const TracedLight*
     Image valid;
     const Image mean = reproject(grids, center, i, other.mean, &valid);
     const Image known = reproject(grids, center, i, other.known, nullptr);
-    const Image variance = reproject(grids, center, i, other.variance, nullptr);
     for (std::size_t p = 0; p < frames.plane_size(); ++p) {
       const float v = valid.plane(0)[p];
       frames.plane(0)[p] += v;
       for (int c = 0; c < 3; ++c) {
         guide.mean.plane(c)[p] += v * mean.plane(c)[p];
         guide.known.plane(c)[p] += v * known.plane(c)[p];
-        guide.variance.plane(c)[p] += v * variance.plane(c)[p];
       }
     }
   }
-  // The means of the frames found; the variance of a mean of k frames' means is their mean
-  // variance over k.
+  // The means of the frames found, each where its guide is known. The frames' guides have the
+  // same samples on the same surfaces, so the noise of a mean of k of them is this frame's over k.
   for (std::size_t p = 0; p < frames.plane_size(); ++p) {
     const float k = frames.plane(0)[p];
     for (int c = 0; c < 3; ++c) {
       const float known = guide.known.plane(c)[p];
-      // Each frame's mean counts where its guide is known.
       guide.mean.plane(c)[p] = known > 0 ? guide.mean.plane(c)[p] / known : 0.0f;
-      guide.variance.plane(c)[p] = known > 0 ? guide.variance.plane(c)[p] / (known * known) : 0.0f;
+      guide.variance.plane(c)[p] = known > 0 ? guide.variance.plane(c)[p] / known : 0.0f;
       guide.known.plane(c)[p] = known / k;
     }
   }
   GuideReport report;
-  Image out = guided_light(on_grid, guide, own.grid.depth, g.depth, g.normal,
+  Image out = guided_light(on_grid, guide, own.grid.depth, own.grid.normal,
                            pyramid_level(plan_.trace_scale), settings_.denoise_settings, &report);
   const auto percent = [](double v) { return std::to_string(std::lround(100 * v)) + "%"; };
   log_info("frame " + std::to_string(g.frame) + ": guide: gives the light of " +

@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
+#include "buffers.h"
 #include "gi/denoise.h"
 #include "parallel.h"
 #include "throw.h"
@@ -65,18 +67,60 @@ GuideOnGrid guide_on_grid(const GBuffer& frame, const GBuffer& grid, int scale,
   out.variance = Image(gw, gh, 3);
   out.known = Image(gw, gh, 3);
   const float* zg = guide.depth.plane(0);
-  // A surface without diffuse albedo (an emitter) reflects no diffuse light: a renderer writes 0
-  // there, which says nothing of the light around it. A guide pixel is read where the frame's
-  // pixel at its centre has albedo.
+  const std::size_t pixels = static_cast<std::size_t>(lw) * lh;
+  // Per guide pixel, once: whether it gives channel c (a surface whose frame pixel at its centre
+  // has albedo: an emitter's diffuse light is 0 in a renderer's pass, which says nothing of the
+  // light around it; and where the pass is known), and its squared second differences along x
+  // and y where both neighbours give c on its own surface (within `thickness` of its depth),
+  // each over 1.5, with their count: a ramp's are 0, a smooth light's small, and iid noise of
+  // variance s^2 gives a squared difference v - (left + right) / 2 of 1.5 s^2. The light's own
+  // slope is not taken for noise, so that a guide without noise has none.
   const bool with_albedo = !frame.albedo.empty();
-  const auto reflects = [&](int x, int y) {
-    if (!with_albedo) return true;
-    const int fx = x * f + f / 2 - ox, fy = y * f + f / 2 - oy;
-    if (fx < 0 || fy < 0 || fx >= frame.width() || fy >= frame.height()) return true;
-    const std::size_t p = static_cast<std::size_t>(fy) * frame.width() + fx;
-    return frame.albedo.plane(0)[p] != 0 || frame.albedo.plane(1)[p] != 0 ||
-           frame.albedo.plane(2)[p] != 0;
-  };
+  // Written for every pixel (gives) or read only where written (the rest): no zeroing, which
+  // at 1080p would fault in 30 MB a frame before any use.
+  UninitializedVector<std::uint8_t> gives(pixels * 3), differences(pixels * 3);
+  UninitializedVector<float> squares(pixels * 3);
+  parallel_for_rows(lh, [&](int y) {
+    for (int x = 0; x < lw; ++x) {
+      const std::size_t q = static_cast<std::size_t>(y) * lw + x;
+      bool reflects = std::isfinite(zg[q]);
+      const int fx = x * f + f / 2 - ox, fy = y * f + f / 2 - oy;
+      if (reflects && with_albedo && fx >= 0 && fy >= 0 && fx < frame.width() &&
+          fy < frame.height()) {
+        const std::size_t p = static_cast<std::size_t>(fy) * frame.width() + fx;
+        reflects = frame.albedo.plane(0)[p] != 0 || frame.albedo.plane(1)[p] != 0 ||
+                   frame.albedo.plane(2)[p] != 0;
+      }
+      for (int c = 0; c < 3; ++c)
+        gives[c * pixels + q] = reflects && (guide.known.empty() || guide.known.plane(c)[q] != 0);
+    }
+  });
+  parallel_for_rows(lh, [&](int y) {
+    for (int x = 0; x < lw; ++x) {
+      const std::size_t q = static_cast<std::size_t>(y) * lw + x;
+      const float z = zg[q];
+      const auto near = [&](std::size_t n) { return std::fabs(zg[n] - z) <= thickness * z; };
+      for (int c = 0; c < 3; ++c) {
+        const std::uint8_t* g = gives.data() + c * pixels;
+        if (!g[q]) continue;
+        const float* v = guide.light.plane(c);
+        double sum = 0;
+        int n = 0;
+        if (x > 0 && x + 1 < lw && g[q - 1] && g[q + 1] && near(q - 1) && near(q + 1)) {
+          const double d = v[q] - 0.5 * (v[q - 1] + v[q + 1]);
+          sum += d * d / 1.5;
+          ++n;
+        }
+        if (y > 0 && y + 1 < lh && g[q - lw] && g[q + lw] && near(q - lw) && near(q + lw)) {
+          const double d = v[q] - 0.5 * (v[q - lw] + v[q + lw]);
+          sum += d * d / 1.5;
+          ++n;
+        }
+        squares[c * pixels + q] = static_cast<float>(sum);
+        differences[c * pixels + q] = static_cast<std::uint8_t>(n);
+      }
+    }
+  });
   parallel_for_rows(gh, [&](int by) {
     for (int bx = 0; bx < gw; ++bx) {
       const std::size_t s = static_cast<std::size_t>(by) * gw + bx;
@@ -87,48 +131,37 @@ GuideOnGrid guide_on_grid(const GBuffer& frame, const GBuffer& grid, int scale,
       const int y1 = std::min(y0 + scale, frame.height()) - 1;
       const GuideRect block{lattice(x0, ox, lw), lattice(y0, oy, lh), lattice(x1, ox, lw) + 1,
                             lattice(y1, oy, lh) + 1};
-      const GuideRect grown{std::max(block.x0 - 1, 0), std::max(block.y0 - 1, 0),
-                            std::min(block.x1 + 1, lw), std::min(block.y1 + 1, lh)};
-      // A guide pixel is on the sample's surface when its depth is within `thickness` of the
-      // sample's, and gives channel c when the guide knows it there.
-      const auto on_surface = [&](int x, int y, int c) {
-        const std::size_t q = static_cast<std::size_t>(y) * lw + x;
-        return std::fabs(zg[q] - zs) <= thickness * zs &&
-               (guide.known.empty() || guide.known.plane(c)[q] != 0) && reflects(x, y);
-      };
-      for (int c = 0; c < 3; ++c) {
-        const float* v = guide.light.plane(c);
-        Moments in_block, around;
-        // The noise from each pixel's second differences along x and y where both neighbours
-        // are on the surface: a ramp's are 0, a smooth light's small, and iid noise of variance
-        // s^2 gives a squared difference v - (left + right) / 2 of 1.5 s^2. The light's own slope
-        // is not taken for noise, so that a guide without noise has none.
-        double noise = 0;
-        int noise_n = 0;
-        const auto value_at = [&](int x, int y) { return v[static_cast<std::size_t>(y) * lw + x]; };
-        for (int y = grown.y0; y < grown.y1; ++y)
-          for (int x = grown.x0; x < grown.x1; ++x) {
-            if (!on_surface(x, y, c)) continue;
-            const double value = value_at(x, y);
-            around.add(value);
-            if (x >= block.x0 && x < block.x1 && y >= block.y0 && y < block.y1) in_block.add(value);
-            if (x > 0 && x + 1 < lw && on_surface(x - 1, y, c) && on_surface(x + 1, y, c)) {
-              const double d = value - 0.5 * (value_at(x - 1, y) + value_at(x + 1, y));
-              noise += d * d / 1.5;
-              ++noise_n;
-            }
-            if (y > 0 && y + 1 < lh && on_surface(x, y - 1, c) && on_surface(x, y + 1, c)) {
-              const double d = value - 0.5 * (value_at(x, y - 1) + value_at(x, y + 1));
-              noise += d * d / 1.5;
-              ++noise_n;
-            }
+      // A block narrower than three guide pixels grown by one each side, so that its noise is
+      // seen over a few pixels; a wider one shows it on its own.
+      const int gx = block.x1 - block.x0 < 3 ? 1 : 0, gy = block.y1 - block.y0 < 3 ? 1 : 0;
+      const GuideRect grown{std::max(block.x0 - gx, 0), std::max(block.y0 - gy, 0),
+                            std::min(block.x1 + gx, lw), std::min(block.y1 + gy, lh)};
+      Moments in_block[3], around[3];
+      double noise[3] = {0, 0, 0};
+      int noise_n[3] = {0, 0, 0};
+      for (int y = grown.y0; y < grown.y1; ++y)
+        for (int x = grown.x0; x < grown.x1; ++x) {
+          const std::size_t q = static_cast<std::size_t>(y) * lw + x;
+          // On the sample's surface: within `thickness` of its depth.
+          if (!(std::fabs(zg[q] - zs) <= thickness * zs)) continue;
+          const bool inside = x >= block.x0 && x < block.x1 && y >= block.y0 && y < block.y1;
+          for (int c = 0; c < 3; ++c) {
+            if (!gives[c * pixels + q]) continue;
+            const double value = guide.light.plane(c)[q];
+            around[c].add(value);
+            if (inside) in_block[c].add(value);
+            noise[c] += squares[c * pixels + q];
+            noise_n[c] += differences[c * pixels + q];
           }
-        if (around.n == 0) continue;
-        const Moments& mean = in_block.n > 0 ? in_block : around;
+        }
+      for (int c = 0; c < 3; ++c) {
+        if (around[c].n == 0) continue;
+        const Moments& mean = in_block[c].n > 0 ? in_block[c] : around[c];
         out.mean.plane(c)[s] = static_cast<float>(mean.sum / mean.n);
         // A surface too small to show noise (a pixel or two wide both ways) is its own
         // neighbourhood for the denoiser too: the guide's mean is kept there as it is.
-        out.variance.plane(c)[s] = noise_n > 0 ? static_cast<float>(noise / noise_n / mean.n) : 0;
+        out.variance.plane(c)[s] =
+            noise_n[c] > 0 ? static_cast<float>(noise[c] / noise_n[c] / mean.n) : 0.0f;
         out.known.plane(c)[s] = 1.0f;
       }
     }
@@ -137,25 +170,27 @@ GuideOnGrid guide_on_grid(const GBuffer& frame, const GBuffer& grid, int scale,
 }
 
 Image guided_light(const Image& light, const GuideOnGrid& guide, const Image& grid_depth,
-                   const Image& depth, const Image& normal, int level,
-                   const DenoiseSettings& settings, GuideReport* report) {
+                   const Image& grid_normal, int level, const DenoiseSettings& settings,
+                   GuideReport* report) {
   const int w = light.width(), h = light.height();
-  for (const Image* image : {&guide.mean, &guide.variance, &guide.known, &grid_depth})
+  for (const Image* image : {&guide.mean, &guide.variance, &guide.known, &grid_depth, &grid_normal})
     if (image->width() != w || image->height() != h || light.channels() != 3)
       throw Error(ErrorKind::kInternal, "", "guided_light: images of different sizes");
   // The residual's pyramid goes as deep as the light's, with looser edges: what ssgi gets wrong
   // follows the geometry less sharply than the light does, and the light's edges leave pixels
   // of fine geometry (grass, rods) belonging to no coarser sample, so unfiltered
-  // (tests/accuracy/README.md, "Guides", has the measurements).
+  // (tests/accuracy/README.md, "Guides", has the measurements). It is built from the grid's own
+  // depth and normals, the grid its level 0: four filters a frame, each a pyramid of the grid's
+  // size rather than of the frame's.
   DenoiseSettings residual_settings = settings;
-  residual_settings.levels = std::max(settings.levels, level);
+  residual_settings.levels = std::max(settings.levels, level) - level;
   residual_settings.normal_power = kResidualNormalPower;
   residual_settings.sigma_depth = kResidualSigmaDepth;
   // The pyramid filters each channel as a convex combination over a surface: filtering a value
   // times its weight and the weight alike, their ratio is the mean over the known samples alone
   // (normalised convolution).
   const auto filter = [&](const Image& image) {
-    return upsample_and_denoise(image, level, depth, normal, residual_settings, true, level);
+    return upsample_and_denoise(image, 0, grid_depth, grid_normal, residual_settings, true, 0);
   };
   Image residual(w, h, 3);
   for (int c = 0; c < 3; ++c)

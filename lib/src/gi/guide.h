@@ -26,14 +26,15 @@ struct GuideOnGrid {
 
 // `guide` (frame `frame`'s, at 1 / guide.fraction of its resolution) on the trace grid `grid`
 // (TracedLight::grid: trace samples of `scale` x `scale` blocks of the frame's data window).
-// A guide pixel is on a sample's surface when its depth is within `thickness` x the sample's of
-// it and the frame's pixel at its centre has albedo (an emitter's diffuse light says nothing).
-// Each sample's mean is over its block's guide pixels on its surface (over the block grown by a
-// guide pixel each side where none is); the variance of that mean is the guide's noise, from
-// the second differences along x and y of the pixels on the surface in the grown block (where
-// both neighbours are on it too), over the number averaged (0 on a surface without such pixels,
-// too small to show noise). A sample without a surface, or without a guide pixel on it in the
-// grown block, is not known.
+// A guide pixel gives channel c where it shows a surface whose frame pixel at its centre has
+// albedo (an emitter's diffuse light says nothing) and the guide knows c; it is on a sample's
+// surface when its depth is within `thickness` x the sample's of it. Each sample's mean is over
+// its block's guide pixels on its surface (over the block grown by a guide pixel each side where
+// none is); the variance of that mean is the guide's noise, from the second differences along x
+// and y of the pixels on the surface in the grown block (where both neighbours give c on the
+// pixel's own surface), over the number averaged (0 on a surface without such pixels, too small
+// to show noise). A sample without a surface, or without a guide pixel on it in the grown block,
+// is not known.
 GuideOnGrid guide_on_grid(const GBuffer& frame, const GBuffer& grid, int scale,
                           const GuideFrame& guide, float thickness);
 
@@ -51,15 +52,15 @@ struct GuideReport {
 // `light` (3 channels on the grid's trace samples: a frame's light after the temporal stage)
 // guided by `guide` (its window's frames' means, variances and known, averaged over the window
 // by the caller: the variance divided by the frames averaged): light + the residual guide -
-// light, filtered (the pyramid of `settings` from pyramid level `level`, with the full-resolution
-// `depth` and `normal`, as denoise_on_grid filters the light but with looser edges;
-// `grid_depth` is the grid's, +inf where a sample has no surface)
+// light, filtered (the pyramid of `settings` over the grid's `grid_depth`, +inf where a sample has
+// no surface, and `grid_normal`, from the grid's pyramid level `level` as deep as denoise_on_grid
+// filters the light, but with looser edges)
 // where the residual's local energy is within the guide's noise, kept as it is where it stands
 // out of it (a Wiener weight per sample: max(0, energy - noise) / energy, energy and noise
 // averaged over the surface as the residual is). Never below 0. Throws Error(kInternal) when the
 // images disagree in size.
 Image guided_light(const Image& light, const GuideOnGrid& guide, const Image& grid_depth,
-                   const Image& depth, const Image& normal, int level,
-                   const DenoiseSettings& settings, GuideReport* report = nullptr);
+                   const Image& grid_normal, int level, const DenoiseSettings& settings,
+                   GuideReport* report = nullptr);
 
 }  // namespace ssgi::detail
