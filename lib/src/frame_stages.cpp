@@ -293,23 +293,28 @@ Image FrameStages::guided(const GBuffer& g, const std::vector<const TracedLight*
     Image valid;
     const Image mean = reproject(grids, center, i, other.mean, &valid);
     const Image known = reproject(grids, center, i, other.known, nullptr);
+    const Image variance = reproject(grids, center, i, other.variance, nullptr);
     for (std::size_t p = 0; p < frames.plane_size(); ++p) {
       const float v = valid.plane(0)[p];
       frames.plane(0)[p] += v;
       for (int c = 0; c < 3; ++c) {
         guide.mean.plane(c)[p] += v * mean.plane(c)[p];
         guide.known.plane(c)[p] += v * known.plane(c)[p];
+        guide.variance.plane(c)[p] += v * variance.plane(c)[p];
       }
     }
   }
-  // The means of the frames found, each where its guide is known. The frames' guides have the
-  // same samples on the same surfaces, so the noise of a mean of k of them is this frame's over k.
+  // The means of the frames found, each where its guide is known; the variance of a mean of k
+  // frames' means is their mean variance over k. Each frame's variance is seen over a few pixels
+  // only, and a few-sample render's noise is mostly rare bright samples that most of those miss:
+  // the window's frames together see more of them (this frame's alone over k lit lamplit's
+  // detail with noise: tests/accuracy/README.md, "Guides").
   for (std::size_t p = 0; p < frames.plane_size(); ++p) {
     const float k = frames.plane(0)[p];
     for (int c = 0; c < 3; ++c) {
       const float known = guide.known.plane(c)[p];
       guide.mean.plane(c)[p] = known > 0 ? guide.mean.plane(c)[p] / known : 0.0f;
-      guide.variance.plane(c)[p] = known > 0 ? guide.variance.plane(c)[p] / known : 0.0f;
+      guide.variance.plane(c)[p] = known > 0 ? guide.variance.plane(c)[p] / (known * known) : 0.0f;
       guide.known.plane(c)[p] = known / k;
     }
   }
