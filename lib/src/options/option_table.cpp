@@ -66,8 +66,7 @@ const std::vector<OptionSpec> kTable = {
      "an extra view of the scene (repeatable): a pinhole render with its own camera, e.g. a cube "
      "face, as a sequence (####) or a still; missed rays continue in it",
      nullptr},
-    {kGuide, "guide", 0, "PATTERN", OptionGroup::kInput,
-     kRunCommand | kInfoCommand | kSweepCommand,
+    {kGuide, "guide", 0, "PATTERN", OptionGroup::kInput, kRunCommand | kInfoCommand | kSweepCommand,
      "a few-sample render of the shot with the renderer's diffuse indirect light (layout role "
      "indirect), at its resolution or a whole fraction of it: ssgi's light becomes its control "
      "variate",
