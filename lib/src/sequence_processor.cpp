@@ -284,18 +284,12 @@ class Processor {
                        static_cast<int>(seq_.frames_on_disk.size()))
             : 0;
     steps_ = plan_steps(seq_, parts_, mode_, radius_, preroll, job.reuse, read_twice_);
-    if (stages_.plan().views) {
-      std::vector<int> read;
-      for (const Step& s : steps_)
-        if (s.read != kNoFrame && !s.reread) read.push_back(s.read);
-      check_views_cover(seq_, read);
-    }
-    if (stages_.plan().guide) {
-      std::vector<int> read;
-      for (const Step& s : steps_)
-        if (s.read != kNoFrame && !s.reread) read.push_back(s.read);
-      check_guide_covers(seq_, read);
-    }
+    // The views and the guide cover every frame the run decodes for lighting.
+    std::vector<int> read;
+    for (const Step& s : steps_)
+      if (s.read != kNoFrame && !s.reread) read.push_back(s.read);
+    if (stages_.plan().views) check_views_cover(seq_, read);
+    if (stages_.plan().guide) check_guide_covers(seq_, read);
     for (int i = 0; i < static_cast<int>(seq_.frames.size()); ++i)
       if (!job.reuse[i]) output_index_[seq_.frames[i]] = i;
   }
