@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "buffers.h"
@@ -17,6 +18,18 @@ namespace {
 // about 50 degrees, depths within about 20% of one plane still share their residual.
 constexpr float kResidualNormalPower = 2.0f;
 constexpr float kResidualSigmaDepth = 0.2f;
+
+// The residual's local model: a constant plus a slope along each feature of a sample's surface,
+// its normal's three components and its log depth. What ssgi gets wrong changes with the way a
+// surface faces and how far back it stands (the side of a post facing a sunlit wall, the floor
+// under a shelf), so a slope along them keeps what a constant would average across; fitted
+// over the filter's neighbourhood, where many samples share a slope, it costs little noise.
+constexpr int kFeatures = 5;  // 1, nx, ny, nz, log z
+constexpr int kMomentsA = kFeatures * (kFeatures + 1) / 2;
+constexpr int kMoments = kMomentsA + 3 * kFeatures;
+// The ridge on each slope, as a share of the neighbourhood's weight: a slope a neighbourhood
+// does not pin down (a plane's normal does not vary) stays near 0 instead of fitting noise.
+constexpr double kRidge = 0.01;
 
 // The guide pixels of a trace sample, on the guide's pixel lattice: [x0, x1) x [y0, y1).
 struct GuideRect {
@@ -33,19 +46,105 @@ struct Moments {
   }
 };
 
-// `image` (3 channels) with each channel multiplied by `weight`'s.
-Image weighted(const Image& image, const Image& weight) {
-  Image out(image.width(), image.height(), 3);
-  for (int c = 0; c < 3; ++c) {
-    const float* a = image.plane(c);
-    const float* w = weight.plane(c);
-    float* o = out.plane(c);
-    parallel_for_rows(image.height(), [&](int y) {
-      const std::size_t row = static_cast<std::size_t>(y) * image.width();
-      for (int x = 0; x < image.width(); ++x) o[row + x] = a[row + x] * w[row + x];
-    });
-  }
-  return out;
+// The smooth part of channels `channels` of `residual` where `known` (1 or 0; the same for each
+// of them) is set: at each sample, the weighted least-squares fit of the residual to
+// a + b . f(q) over the samples q the pyramid (`filter`) averages into it, evaluated at the
+// sample's own features f(p) (normal and log depth less `log_depth_offset`, which keeps the
+// moments' float sums well conditioned). The weighted sums of f f^T and f r are filtered as
+// images and each sample solves its 5 x 5 system. Writes those channels of `smooth` and of
+// `weight`, the known weight around each sample (0: nothing to fit, the smooth part 0).
+template <typename Filter>
+void fit_residual(const Image& residual, const std::vector<int>& channels, const float* known,
+                  const Image& depth, const Image& normal, float log_depth_offset,
+                  const Filter& filter, Image* smooth, Image* weight) {
+  const int w = residual.width(), h = residual.height();
+  const int count = static_cast<int>(channels.size());
+  const auto features = [&](std::size_t p, double* f) {
+    f[0] = 1;
+    for (int i = 0; i < 3; ++i) f[1 + i] = normal.plane(i)[p];
+    f[4] = std::log(depth.plane(0)[p]) - log_depth_offset;
+  };
+  const int total_moments = kMomentsA + kFeatures * count;
+  std::vector<Image> moments;
+  for (int m = 0; m < total_moments; m += 3) moments.emplace_back(w, h, 3);
+  const auto moment = [&](int m, std::size_t p) -> float& {
+    return moments[m / 3].plane(m % 3)[p];
+  };
+  const auto row_of = [w](int y) {
+    return std::pair<std::size_t, std::size_t>(static_cast<std::size_t>(y) * w,
+                                               static_cast<std::size_t>(y + 1) * w);
+  };
+  parallel_for_rows(h, [&](int y) {
+    const auto [begin, end] = row_of(y);
+    for (std::size_t p = begin; p < end; ++p) {
+      const bool on = known[p] > 0;
+      double f[kFeatures] = {};
+      if (on) features(p, f);
+      int m = 0;
+      for (int i = 0; i < kFeatures; ++i)
+        for (int j = i; j < kFeatures; ++j) moment(m++, p) = static_cast<float>(f[i] * f[j]);
+      for (int i = 0; i < kFeatures; ++i)
+        for (int c : channels)
+          moment(m++, p) = on ? static_cast<float>(f[i] * residual.plane(c)[p]) : 0.0f;
+      for (; m < static_cast<int>(3 * moments.size()); ++m) moment(m, p) = 0;
+    }
+  });
+  for (Image& image : moments) image = filter(image);
+  parallel_for_rows(h, [&](int y) {
+    const auto [begin, end] = row_of(y);
+    for (std::size_t p = begin; p < end; ++p) {
+      const double total = moment(0, p);
+      for (int c : channels) {
+        smooth->plane(c)[p] = 0;
+        weight->plane(c)[p] = 0;
+      }
+      if (!(total > 0) || !std::isfinite(depth.plane(0)[p])) continue;
+      // A (symmetric; positive definite with the ridge) in its lower triangle, factored in
+      // place as L L^T (Cholesky); the right-hand sides, one per channel.
+      double a[kFeatures][kFeatures], b[kFeatures][3];
+      int m = 0;
+      for (int i = 0; i < kFeatures; ++i)
+        for (int j = i; j < kFeatures; ++j) a[j][i] = moment(m++, p);
+      for (int i = 0; i < kFeatures; ++i)
+        for (int k = 0; k < count; ++k) b[i][k] = moment(m++, p);
+      for (int i = 1; i < kFeatures; ++i) a[i][i] += kRidge * total;
+      bool factored = true;
+      for (int j = 0; j < kFeatures && factored; ++j) {
+        double d = a[j][j];
+        for (int k = 0; k < j; ++k) d -= a[j][k] * a[j][k];
+        factored = d > 1e-12 * total;
+        if (!factored) break;
+        a[j][j] = std::sqrt(d);
+        for (int i = j + 1; i < kFeatures; ++i) {
+          double v = a[i][j];
+          for (int k = 0; k < j; ++k) v -= a[i][k] * a[j][k];
+          a[i][j] = v / a[j][j];
+        }
+      }
+      double f[kFeatures];
+      features(p, f);
+      for (int k = 0; k < count; ++k) {
+        double value = b[0][k] / total;  // the plain mean, where the system is singular
+        if (factored) {
+          double z[kFeatures], x[kFeatures];
+          for (int i = 0; i < kFeatures; ++i) {
+            double v = b[i][k];
+            for (int j = 0; j < i; ++j) v -= a[i][j] * z[j];
+            z[i] = v / a[i][i];
+          }
+          value = 0;
+          for (int i = kFeatures - 1; i >= 0; --i) {
+            double v = z[i];
+            for (int j = i + 1; j < kFeatures; ++j) v -= a[j][i] * x[j];
+            x[i] = v / a[i][i];
+            value += f[i] * x[i];
+          }
+        }
+        smooth->plane(channels[k])[p] = std::isfinite(value) ? static_cast<float>(value) : 0.0f;
+        weight->plane(channels[k])[p] = static_cast<float>(total);
+      }
+    }
+  });
 }
 
 }  // namespace
@@ -180,7 +279,7 @@ Image guided_light(const Image& light, const GuideOnGrid& guide, const Image& gr
   // follows the geometry less sharply than the light does, and the light's edges leave pixels
   // of fine geometry (grass, rods) belonging to no coarser sample, so unfiltered
   // (tests/accuracy/README.md, "Guides", has the measurements). It is built from the grid's own
-  // depth and normals, the grid its level 0: four filters a frame, each a pyramid of the grid's
+  // depth and normals, the grid its level 0: twelve filters a frame, each a pyramid of the grid's
   // size rather than of the frame's.
   DenoiseSettings residual_settings = settings;
   residual_settings.levels = std::max(settings.levels, level) - level;
@@ -192,25 +291,51 @@ Image guided_light(const Image& light, const GuideOnGrid& guide, const Image& gr
   const auto filter = [&](const Image& image) {
     return upsample_and_denoise(image, 0, grid_depth, grid_normal, residual_settings, true, 0);
   };
+  // The residual where the guide knows each channel. The channels share one fit where they are
+  // known at the same samples (the moments of the features are then the same for all three);
+  // where they are not (a pass with albedo divided by an albedo with a channel at 0), each
+  // channel is fitted on its own.
+  const std::size_t n = light.plane_size();
   Image residual(w, h, 3);
+  double log_depth_sum = 0;
+  std::size_t surfaces = 0;
+  bool same_known = true;
+  for (std::size_t p = 0; p < n; ++p) {
+    for (int c = 0; c < 3; ++c) {
+      const bool on = guide.known.plane(c)[p] > 0;
+      residual.plane(c)[p] = on ? guide.mean.plane(c)[p] - light.plane(c)[p] : 0.0f;
+      same_known = same_known && on == (guide.known.plane(0)[p] > 0);
+    }
+    if (guide.known.plane(0)[p] > 0 && std::isfinite(grid_depth.plane(0)[p])) {
+      log_depth_sum += std::log(grid_depth.plane(0)[p]);
+      ++surfaces;
+    }
+  }
+  const float log_depth_offset =
+      surfaces > 0 ? static_cast<float>(log_depth_sum / static_cast<double>(surfaces)) : 0.0f;
+  Image smooth(w, h, 3), weight(w, h, 3);
+  const auto fit = [&](const std::vector<int>& channels) {
+    fit_residual(residual, channels, guide.known.plane(channels.front()), grid_depth, grid_normal,
+                 log_depth_offset, filter, &smooth, &weight);
+  };
+  if (same_known) {
+    fit({0, 1, 2});
+  } else {
+    for (int c = 0; c < 3; ++c) fit({c});
+  }
+  // The detail the fit leaves, its local energy and the guide's noise there, on the known
+  // samples, each over the same weight.
+  Image detail(w, h, 3), energy_in(w, h, 3), noise_in(w, h, 3);
   for (int c = 0; c < 3; ++c)
-    for (std::size_t p = 0; p < residual.plane_size(); ++p)
-      residual.plane(c)[p] =
-          guide.known.plane(c)[p] > 0 ? guide.mean.plane(c)[p] - light.plane(c)[p] : 0.0f;
-  const Image weight = filter(guide.known);
-  const Image smooth_sum = filter(weighted(residual, guide.known));
-  Image smooth(w, h, 3), detail(w, h, 3), energy_in(w, h, 3);
-  for (int c = 0; c < 3; ++c)
-    for (std::size_t p = 0; p < smooth.plane_size(); ++p) {
-      const float wt = weight.plane(c)[p];
-      const float r = wt > 0 ? smooth_sum.plane(c)[p] / wt : 0.0f;
-      smooth.plane(c)[p] = r;
-      const float d = guide.known.plane(c)[p] > 0 ? residual.plane(c)[p] - r : 0.0f;
+    for (std::size_t p = 0; p < n; ++p) {
+      const bool on = guide.known.plane(c)[p] > 0;
+      const float d = on ? residual.plane(c)[p] - smooth.plane(c)[p] : 0.0f;
       detail.plane(c)[p] = d;
       energy_in.plane(c)[p] = d * d;
+      noise_in.plane(c)[p] = on ? guide.variance.plane(c)[p] : 0.0f;
     }
   const Image energy = filter(energy_in);
-  const Image noise = filter(weighted(guide.variance, guide.known));
+  const Image noise = filter(noise_in);
   Image out(w, h, 3);
   double residual_sum = 0, out_sum = 0, kept_sum = 0;
   std::size_t surface = 0, known = 0;

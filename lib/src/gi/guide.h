@@ -1,10 +1,11 @@
 // A guide's light with ssgi's as its control variate (--guide, io/guide.h). A few-sample render
 // of the renderer's indirect light knows its level but is noise pixel by pixel; ssgi's light is
 // smooth but misses what the frame does not show. Their difference, the residual, is what ssgi
-// got wrong plus the guide's noise: filtered over the window's frames (reprojected as the light
-// is) and over the surface (the denoiser's pyramid, guided by depth and normals), it corrects
-// ssgi's level and large shapes, and where the residual stands out of the guide's own noise it
-// is kept as it is, so that a guide without noise gives its own light back.
+// got wrong plus the guide's noise: averaged over the window's frames (reprojected as the light
+// is) and fitted over the surface (a constant plus slopes along the normal and log depth, over
+// the neighbourhood the denoiser's pyramid averages), it corrects ssgi's level and shapes, and
+// where the residual stands out of the fit by more than the guide's own noise it is kept as it
+// is, so that a guide without noise gives its own light back.
 #pragma once
 
 #include <vector>
@@ -52,13 +53,15 @@ struct GuideReport {
 // `light` (3 channels on the grid's trace samples: a frame's light after the temporal stage)
 // guided by `guide` (its window's frames' means, variances and known, averaged over the window
 // by the caller: the variance divided by the frames averaged): light + the residual guide -
-// light, filtered (the pyramid of `settings` over the grid's `grid_depth`, +inf where a sample has
-// no surface, and `grid_normal`, from the grid's pyramid level `level` as deep as denoise_on_grid
-// filters the light, but with looser edges)
-// where the residual's local energy is within the guide's noise, kept as it is where it stands
-// out of it (a Wiener weight per sample: max(0, energy - noise) / energy, energy and noise
-// averaged over the surface as the residual is). Never below 0. Throws Error(kInternal) when the
-// images disagree in size.
+// light, fitted per sample by weighted least squares to a constant plus slopes along the
+// normal and the log depth, with a ridge on the slopes, over the samples the pyramid of
+// `settings` averages into it (over the grid's `grid_depth`, +inf where a sample has no
+// surface, and `grid_normal`, from the grid's pyramid level `level` as deep as denoise_on_grid
+// filters the light, but with looser edges), on the samples where the guide knows the channel;
+// where what the fit leaves has a local energy within the guide's noise it is dropped, where it
+// stands out of it kept (a Wiener weight per sample: max(0, energy - noise) / energy, energy and
+// noise averaged over the surface as the residual is). Never below 0. Throws Error(kInternal)
+// when the images disagree in size.
 Image guided_light(const Image& light, const GuideOnGrid& guide, const Image& grid_depth,
                    const Image& grid_normal, int level, const DenoiseSettings& settings,
                    GuideReport* report = nullptr);
