@@ -360,6 +360,48 @@ TEST(Reproject, TwoFrameOverloadMatchesTheRing) {
   EXPECT_TRUE(same_bits(valid_pair, valid_ring));
 }
 
+TEST(Reproject, SeveralHistoriesAtOnceAreEachTheOneHistoryForm) {
+  // Through the moving sphere's vectors two frames away and along the pan's cameras; the second
+  // history has a non-finite patch, where the first is found but the second has fewer taps.
+  for (const char* fixture : {"moving", "pan"}) {
+    const std::vector<GBuffer> shot = load_fixture(fixture);
+    const std::vector<const GBuffer*> frames = pointers(shot);
+    const int from = 3, to = 1;
+    const Image first = coordinates(shot[to]);
+    Image second(first.width(), first.height(), 3), third = first;
+    for (int c = 0; c < 3; ++c)
+      for (int y = 0; y < second.height(); ++y)
+        for (int x = 0; x < second.width(); ++x) {
+          second.at(c, x, y) = 0.5f + 0.25f * static_cast<float>(c) + 0.01f * static_cast<float>(y);
+          third.at(c, x, y) *= 2.0f;
+        }
+    second.at(1, 10, 10) = std::numeric_limits<float>::quiet_NaN();
+    Image valid, valid_one;
+    const std::vector<Image> all = reproject(frames, from, to, {&first, &second, &third}, &valid);
+    ASSERT_EQ(all.size(), 3u);
+    EXPECT_TRUE(same_bits(all[0], reproject(frames, from, to, first, &valid_one))) << fixture;
+    EXPECT_TRUE(same_bits(valid, valid_one)) << fixture;
+    EXPECT_TRUE(same_bits(all[2], reproject(frames, from, to, third, nullptr))) << fixture;
+    // The second as its own form wherever that finds it; where only the first is found, 0.
+    Image valid_second;
+    const Image second_alone = reproject(frames, from, to, second, &valid_second);
+    int found = 0;
+    for (int y = 0; y < valid.height(); ++y)
+      for (int x = 0; x < valid.width(); ++x) {
+        if (!(valid.at(0, x, y) > 0)) continue;
+        ++found;
+        for (int c = 0; c < 3; ++c)
+          EXPECT_EQ(all[1].at(c, x, y),
+                    valid_second.at(0, x, y) > 0 ? second_alone.at(c, x, y) : 0.0f);
+      }
+    EXPECT_GT(found, valid.width() * valid.height() / 4) << fixture;
+  }
+  const std::vector<GBuffer> shot = load_fixture("pan");
+  const Image light = coordinates(shot[1]);
+  EXPECT_THROW(reproject(pointers(shot), 0, 1, std::vector<const Image*>{}, nullptr), Error);
+  EXPECT_THROW(reproject(pointers(shot), 0, 1, {&light, &light, &light, &light}, nullptr), Error);
+}
+
 // Disocclusion: the sphere of `moving` crosses the wall at ~5.9 px per frame.
 
 // The sphere is what moves (the camera is still): its pixels, from the Vector pass.

@@ -291,9 +291,9 @@ Image FrameStages::guided(const GBuffer& g, const std::vector<const TracedLight*
     if (i == center || std::abs(window[i]->grid.frame - n) > radius) continue;
     const GuideOnGrid& other = window[i]->guide;
     Image valid;
-    const Image mean = reproject(grids, center, i, other.mean, &valid);
-    const Image known = reproject(grids, center, i, other.known, nullptr);
-    const Image variance = reproject(grids, center, i, other.variance, nullptr);
+    const std::vector<Image> carried =
+        reproject(grids, center, i, {&other.mean, &other.known, &other.variance}, &valid);
+    const Image &mean = carried[0], &known = carried[1], &variance = carried[2];
     for (std::size_t p = 0; p < frames.plane_size(); ++p) {
       const float v = valid.plane(0)[p];
       frames.plane(0)[p] += v;

@@ -45,6 +45,8 @@ constexpr double kConsistencyRelative = 0.2;
 // History found on less than this bilinear weight of accepted taps lies almost entirely on a
 // rejected pixel: rebuilding it from a neighbour's sliver would be extrapolation.
 constexpr double kMinHistoryWeight = 0.05;
+// The most histories one reprojection carries at once (reproject's several-history form).
+constexpr std::size_t kMaxHistories = 3;
 // Variance clipping (Salvi 2016): the box is mean +- gamma * sigma of the 3x3 neighbourhood.
 // The indirect light arrives denoised, so its spatial sigma underestimates how much a pixel
 // varies from frame to frame (the residual noise is blotches larger than 3x3): sigma gets a
@@ -211,40 +213,49 @@ bool nearest_tap(const ChainFrame& f, const Imath::V2d& q, int* tx, int* ty) {
   return true;
 }
 
-// Bilinear lookup of `history` at display position q over the accepted taps. Returns the
-// accepted weight (0 when none) and the normalised value in out[3].
-double fetch(const ChainFrame& f, const Image& history, const Imath::V2d& q, const Expectation& e,
-             double out[3]) {
+// Bilinear lookup of each of `histories` (kMaxHistories at most) at display position q over
+// the taps that pass the disocclusion tests, tested once for all of them; a tap counts for a
+// history where its three values are finite. Writes each history's normalised value to
+// out[3 h .. 3 h + 2] (0 where it has too little weight); true when the first has enough.
+bool fetch(const ChainFrame& f, const std::vector<const Image*>& histories, const Imath::V2d& q,
+           const Expectation& e, double* out) {
+  const std::size_t count = histories.size();
+  for (std::size_t h = 0; h < 3 * count; ++h) out[h] = 0;
   const double u = q.x - f.ox - 0.5, v = q.y - f.oy - 0.5;
   const int w = f.g->width(), h = f.g->height();
-  if (!(u > -1 && u < w && v > -1 && v < h)) return 0;
+  if (!(u > -1 && u < w && v > -1 && v < h)) return false;
   const double fu = std::floor(u), fv = std::floor(v);
   const int x0 = static_cast<int>(fu), y0 = static_cast<int>(fv);
   const double wx[2] = {1 - (u - fu), u - fu}, wy[2] = {1 - (v - fv), v - fv};
-  double sum[3] = {0, 0, 0}, weight = 0;
+  double sum[kMaxHistories][3] = {}, weight[kMaxHistories] = {};
   for (int j = 0; j < 2; ++j) {
     for (int k = 0; k < 2; ++k) {
       const int tx = x0 + k, ty = y0 + j;
       const double wt = wx[k] * wy[j];
       if (!(wt > 0) || tx < 0 || tx >= w || ty < 0 || ty >= h) continue;
       if (!accept_tap(f, tx, ty, e)) continue;
-      const std::size_t i = index(history, tx, ty);
-      const double r = history.plane(0)[i], g = history.plane(1)[i], b = history.plane(2)[i];
-      if (!std::isfinite(r) || !std::isfinite(g) || !std::isfinite(b)) continue;
-      sum[0] += wt * r;
-      sum[1] += wt * g;
-      sum[2] += wt * b;
-      weight += wt;
+      for (std::size_t n = 0; n < count; ++n) {
+        const Image& history = *histories[n];
+        const std::size_t i = index(history, tx, ty);
+        const double r = history.plane(0)[i], g = history.plane(1)[i], b = history.plane(2)[i];
+        if (!std::isfinite(r) || !std::isfinite(g) || !std::isfinite(b)) continue;
+        sum[n][0] += wt * r;
+        sum[n][1] += wt * g;
+        sum[n][2] += wt * b;
+        weight[n] += wt;
+      }
     }
   }
-  if (weight < kMinHistoryWeight) return 0;
-  for (int c = 0; c < 3; ++c) out[c] = sum[c] / weight;
-  return weight;
+  for (std::size_t n = 0; n < count; ++n)
+    if (weight[n] >= kMinHistoryWeight)
+      for (int c = 0; c < 3; ++c) out[3 * n + c] = sum[n][c] / weight[n];
+  return weight[0] >= kMinHistoryWeight;
 }
 
-// Reprojects one pixel (x, y) of chain[0] into the last chain frame; false when no history.
-bool reproject_pixel(const std::vector<ChainFrame>& chain, const Image& history, int x, int y,
-                     double out[3]) {
+// Reprojects one pixel (x, y) of chain[0] into the last chain frame, each of `histories` into
+// out[3 h ..] (fetch); false when the first has no history there.
+bool reproject_pixel(const std::vector<ChainFrame>& chain,
+                     const std::vector<const Image*>& histories, int x, int y, double* out) {
   const ChainFrame& current = chain.front();
   const GBuffer& g = *current.g;
   const std::size_t i = index(g.depth, x, y);
@@ -277,7 +288,7 @@ bool reproject_pixel(const std::vector<ChainFrame>& chain, const Image& history,
     Expectation e;
     e.point = s.point;
     e.normal = s.normal;
-    return fetch(other, history, s.pixel, e, out) > 0;
+    return fetch(other, histories, s.pixel, e, out);
   }
   // Along the vectors, checking at each frame in between that the point is still in view.
   Imath::V2d q = q0 + step;
@@ -291,7 +302,7 @@ bool reproject_pixel(const std::vector<ChainFrame>& chain, const Image& history,
     q = q + step;
     if (!std::isfinite(q.x) || !std::isfinite(q.y)) return false;
   }
-  return fetch(other, history, q, moving_expectation(other, s, z, q, step), out) > 0;
+  return fetch(other, histories, q, moving_expectation(other, s, z, q, step), out);
 }
 
 void check_same_size(const GBuffer& a, const GBuffer& b) {
@@ -376,28 +387,37 @@ void clip_to_boxes(const GBuffer& g, const Image& boxes, const Image& valid, Ima
 
 }  // namespace
 
-Image reproject(const std::vector<const GBuffer*>& frames, int from, int to, const Image& history,
-                Image* valid) {
+std::vector<Image> reproject(const std::vector<const GBuffer*>& frames, int from, int to,
+                             const std::vector<const Image*>& histories, Image* valid) {
   const int count = static_cast<int>(frames.size());
   if (from < 0 || from >= count || to < 0 || to >= count)
     throw Error(ErrorKind::kInternal, {}, "temporal stage: frame index out of range");
+  if (histories.empty() || histories.size() > kMaxHistories)
+    throw Error(ErrorKind::kInternal, {}, "temporal stage: too many histories at once");
   const GBuffer& current = *frames[from];
   for (const GBuffer* f : frames) check_same_size(current, *f);
-  check_light(*frames[to], history, "history");
+  for (const Image* history : histories) check_light(*frames[to], *history, "history");
   const int w = current.width(), h = current.height();
-  Image out(w, h, 3);
+  std::vector<Image> out;
+  for (std::size_t n = 0; n < histories.size(); ++n) out.emplace_back(w, h, 3);
   if (valid) *valid = Image(w, h, 1);
   const std::vector<ChainFrame> chain = make_chain(frames, from, to);
   parallel_for_rows(h, [&](int y) {
     for (int x = 0; x < w; ++x) {
-      double value[3];
-      if (!reproject_pixel(chain, history, x, y, value)) continue;
-      const std::size_t i = index(out, x, y);
-      for (int c = 0; c < 3; ++c) out.plane(c)[i] = static_cast<float>(value[c]);
+      double value[3 * kMaxHistories];
+      if (!reproject_pixel(chain, histories, x, y, value)) continue;
+      const std::size_t i = index(out.front(), x, y);
+      for (std::size_t n = 0; n < histories.size(); ++n)
+        for (int c = 0; c < 3; ++c) out[n].plane(c)[i] = static_cast<float>(value[3 * n + c]);
       if (valid) valid->plane(0)[i] = 1;
     }
   });
   return out;
+}
+
+Image reproject(const std::vector<const GBuffer*>& frames, int from, int to, const Image& history,
+                Image* valid) {
+  return std::move(reproject(frames, from, to, {&history}, valid).front());
 }
 
 Image reproject(const GBuffer& current, const GBuffer& other, const Image& other_history,

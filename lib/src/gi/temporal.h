@@ -84,6 +84,13 @@ void add_continued_light(const TracedLight& own, const Image& continued,
 Image reproject(const std::vector<const GBuffer*>& frames, int from, int to, const Image& history,
                 Image* valid);
 
+// The same for several histories at once (1 to 3, each 3 channels over frames[to]'s data
+// window), the disocclusion tests made once for all: each history as the one-history form gives
+// it, except that `*valid` and where a pixel is written follow the first alone (a pixel where
+// the first is found but another has no finite tap holds 0 in that one).
+std::vector<Image> reproject(const std::vector<const GBuffer*>& frames, int from, int to,
+                             const std::vector<const Image*>& histories, Image* valid);
+
 // The same for two frames: motion vectors are used when they are adjacent frames.
 Image reproject(const GBuffer& current, const GBuffer& other, const Image& other_history,
                 Image* valid);
