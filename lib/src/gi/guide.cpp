@@ -27,9 +27,13 @@ constexpr float kResidualSigmaDepth = 0.2f;
 constexpr int kFeatures = 5;  // 1, nx, ny, nz, log z
 constexpr int kMomentsA = kFeatures * (kFeatures + 1) / 2;
 constexpr int kMoments = kMomentsA + 3 * kFeatures;
-// The ridge on each slope, as a share of the neighbourhood's weight: a slope a neighbourhood
-// does not pin down (a plane's normal does not vary) stays near 0 instead of fitting noise.
+// The ridge on each slope, as a share of the neighbourhood's weight: at least kRidge, so that a
+// slope a neighbourhood does not pin down (a plane's normal does not vary) stays near 0 instead
+// of fitting noise, and kNoiseRidge times the guide's relative noise there (its variance over
+// its squared level) where that is more, so that a noisier guide (one sample, half resolution, a
+// lamplit room's rare bright samples) leans on the constant and a cleaner one on its slopes.
 constexpr double kRidge = 0.01;
+constexpr double kNoiseRidge = 0.03;
 
 // The guide pixels of a trace sample, on the guide's pixel lattice: [x0, x1) x [y0, y1).
 struct GuideRect {
@@ -50,13 +54,16 @@ struct Moments {
 // of them) is set: at each sample, the weighted least-squares fit of the residual to
 // a + b . f(q) over the samples q the pyramid (`filter`) averages into it, evaluated at the
 // sample's own features f(p) (normal and log depth less `log_depth_offset`, which keeps the
-// moments' float sums well conditioned). The weighted sums of f f^T and f r are filtered as
-// images and each sample solves its 5 x 5 system. Writes those channels of `smooth` and of
-// `weight`, the known weight around each sample (0: nothing to fit, the smooth part 0).
+// moments' float sums well conditioned), with a ridge on the slopes from the guide's noise
+// there (`noise_sum`, its variance filtered as the moments are) against its level (`light`'s
+// plus the mean residual). The weighted sums of f f^T and f r are filtered as images and each
+// sample solves its 5 x 5 system. Writes those channels of `smooth` and of `weight`, the known
+// weight around each sample (0: nothing to fit, the smooth part 0).
 template <typename Filter>
 void fit_residual(const Image& residual, const std::vector<int>& channels, const float* known,
                   const Image& depth, const Image& normal, float log_depth_offset,
-                  const Filter& filter, Image* smooth, Image* weight) {
+                  const Filter& filter, const Image& noise_sum, const Image& light, Image* smooth,
+                  Image* weight) {
   const int w = residual.width(), h = residual.height();
   const int count = static_cast<int>(channels.size());
   const auto features = [&](std::size_t p, double* f) {
@@ -107,7 +114,16 @@ void fit_residual(const Image& residual, const std::vector<int>& channels, const
         for (int j = i; j < kFeatures; ++j) a[j][i] = moment(m++, p);
       for (int i = 0; i < kFeatures; ++i)
         for (int k = 0; k < count; ++k) b[i][k] = moment(m++, p);
-      for (int i = 1; i < kFeatures; ++i) a[i][i] += kRidge * total;
+      // The guide's level here: the sample's light plus the neighbourhood's mean residual.
+      double noise = 0, level = 0;
+      for (int k = 0; k < count; ++k) {
+        const int c = channels[k];
+        noise += noise_sum.plane(c)[p] / total;
+        const double guide_level = b[0][k] / total + light.plane(c)[p];
+        level += guide_level * guide_level;
+      }
+      const double ridge = level > 0 ? std::clamp(kNoiseRidge * noise / level, kRidge, 1.0) : 1.0;
+      for (int i = 1; i < kFeatures; ++i) a[i][i] += ridge * total;
       bool factored = true;
       for (int j = 0; j < kFeatures && factored; ++j) {
         double d = a[j][j];
@@ -313,10 +329,17 @@ Image guided_light(const Image& light, const GuideOnGrid& guide, const Image& gr
   }
   const float log_depth_offset =
       surfaces > 0 ? static_cast<float>(log_depth_sum / static_cast<double>(surfaces)) : 0.0f;
+  Image noise_in(w, h, 3);
+  for (int c = 0; c < 3; ++c)
+    for (std::size_t p = 0; p < n; ++p) {
+      const bool on = guide.known.plane(c)[p] > 0;
+      noise_in.plane(c)[p] = on ? guide.variance.plane(c)[p] : 0.0f;
+    }
+  const Image noise = filter(noise_in);
   Image smooth(w, h, 3), weight(w, h, 3);
   const auto fit = [&](const std::vector<int>& channels) {
     fit_residual(residual, channels, guide.known.plane(channels.front()), grid_depth, grid_normal,
-                 log_depth_offset, filter, &smooth, &weight);
+                 log_depth_offset, filter, noise, light, &smooth, &weight);
   };
   if (same_known) {
     fit({0, 1, 2});
@@ -325,17 +348,15 @@ Image guided_light(const Image& light, const GuideOnGrid& guide, const Image& gr
   }
   // The detail the fit leaves, its local energy and the guide's noise there, on the known
   // samples, each over the same weight.
-  Image detail(w, h, 3), energy_in(w, h, 3), noise_in(w, h, 3);
+  Image detail(w, h, 3), energy_in(w, h, 3);
   for (int c = 0; c < 3; ++c)
     for (std::size_t p = 0; p < n; ++p) {
       const bool on = guide.known.plane(c)[p] > 0;
       const float d = on ? residual.plane(c)[p] - smooth.plane(c)[p] : 0.0f;
       detail.plane(c)[p] = d;
       energy_in.plane(c)[p] = d * d;
-      noise_in.plane(c)[p] = on ? guide.variance.plane(c)[p] : 0.0f;
     }
   const Image energy = filter(energy_in);
-  const Image noise = filter(noise_in);
   Image out(w, h, 3);
   double residual_sum = 0, out_sum = 0, kept_sum = 0;
   std::size_t surface = 0, known = 0;

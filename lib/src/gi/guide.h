@@ -54,10 +54,11 @@ struct GuideReport {
 // guided by `guide` (its window's frames' means, variances and known, averaged over the window
 // by the caller: the variance divided by the frames averaged): light + the residual guide -
 // light, fitted per sample by weighted least squares to a constant plus slopes along the
-// normal and the log depth, with a ridge on the slopes, over the samples the pyramid of
-// `settings` averages into it (over the grid's `grid_depth`, +inf where a sample has no
-// surface, and `grid_normal`, from the grid's pyramid level `level` as deep as denoise_on_grid
-// filters the light, but with looser edges), on the samples where the guide knows the channel;
+// normal and the log depth, with a ridge on the slopes that grows with the guide's relative
+// noise, over the samples the pyramid of `settings` averages into it (over the grid's
+// `grid_depth`, +inf where a sample has no surface, and `grid_normal`, from the grid's pyramid
+// level `level` as deep as denoise_on_grid filters the light, but with looser edges), on the
+// samples where the guide knows the channel;
 // where what the fit leaves has a local energy within the guide's noise it is dropped, where it
 // stands out of it kept (a Wiener weight per sample: max(0, energy - noise) / energy, energy and
 // noise averaged over the surface as the residual is). Never below 0. Throws Error(kInternal)
