@@ -295,8 +295,9 @@ Image guided_light(const Image& light, const GuideOnGrid& guide, const Image& gr
   // follows the geometry less sharply than the light does, and the light's edges leave pixels
   // of fine geometry (grass, rods) belonging to no coarser sample, so unfiltered
   // (tests/accuracy/README.md, "Guides", has the measurements). It is built from the grid's own
-  // depth and normals, the grid its level 0: twelve filters a frame, each a pyramid of the grid's
-  // size rather than of the frame's.
+  // depth and normals, the grid its level 0: twelve filters a frame where the channels share one
+  // fit (ten for its moments, the noise, the detail's energy), each a pyramid of the grid's size
+  // rather than of the frame's.
   DenoiseSettings residual_settings = settings;
   residual_settings.levels = std::max(settings.levels, level) - level;
   residual_settings.normal_power = kResidualNormalPower;
@@ -312,7 +313,7 @@ Image guided_light(const Image& light, const GuideOnGrid& guide, const Image& gr
   // where they are not (a pass with albedo divided by an albedo with a channel at 0), each
   // channel is fitted on its own.
   const std::size_t n = light.plane_size();
-  Image residual(w, h, 3);
+  Image residual(w, h, 3), noise_in(w, h, 3);
   double log_depth_sum = 0;
   std::size_t surfaces = 0;
   bool same_known = true;
@@ -320,6 +321,7 @@ Image guided_light(const Image& light, const GuideOnGrid& guide, const Image& gr
     for (int c = 0; c < 3; ++c) {
       const bool on = guide.known.plane(c)[p] > 0;
       residual.plane(c)[p] = on ? guide.mean.plane(c)[p] - light.plane(c)[p] : 0.0f;
+      noise_in.plane(c)[p] = on ? guide.variance.plane(c)[p] : 0.0f;
       same_known = same_known && on == (guide.known.plane(0)[p] > 0);
     }
     if (guide.known.plane(0)[p] > 0 && std::isfinite(grid_depth.plane(0)[p])) {
@@ -329,12 +331,6 @@ Image guided_light(const Image& light, const GuideOnGrid& guide, const Image& gr
   }
   const float log_depth_offset =
       surfaces > 0 ? static_cast<float>(log_depth_sum / static_cast<double>(surfaces)) : 0.0f;
-  Image noise_in(w, h, 3);
-  for (int c = 0; c < 3; ++c)
-    for (std::size_t p = 0; p < n; ++p) {
-      const bool on = guide.known.plane(c)[p] > 0;
-      noise_in.plane(c)[p] = on ? guide.variance.plane(c)[p] : 0.0f;
-    }
   const Image noise = filter(noise_in);
   Image smooth(w, h, 3), weight(w, h, 3);
   const auto fit = [&](const std::vector<int>& channels) {

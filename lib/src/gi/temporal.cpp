@@ -393,7 +393,8 @@ std::vector<Image> reproject(const std::vector<const GBuffer*>& frames, int from
   if (from < 0 || from >= count || to < 0 || to >= count)
     throw Error(ErrorKind::kInternal, {}, "temporal stage: frame index out of range");
   if (histories.empty() || histories.size() > kMaxHistories)
-    throw Error(ErrorKind::kInternal, {}, "temporal stage: too many histories at once");
+    throw Error(ErrorKind::kInternal, {},
+                "temporal stage: reproject carries 1 to 3 histories at once");
   const GBuffer& current = *frames[from];
   for (const GBuffer* f : frames) check_same_size(current, *f);
   for (const Image* history : histories) check_light(*frames[to], *history, "history");
